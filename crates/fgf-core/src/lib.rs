@@ -1,0 +1,18 @@
+//! # fgf-core
+//!
+//! The analytic heart of fgf: constants of fractional Gaussian fields, the
+//! variance of the line-averaged extinction, and the gamma-closure
+//! transmittance models with their free-flight samplers (`theory.md` §1–4).
+//!
+//! Conventions used throughout the workspace:
+//! * distances `t` are in scene units, extinctions `sigma_t` in 1/unit,
+//!   optical depth `tau = sigma_t * t` is dimensionless;
+//! * every sampler takes its uniform variate `u ∈ [0,1)` as an argument;
+//! * constructors validate and return [`ParamError`] naming the parameter and
+//!   its valid range; nothing is silently clamped.
+
+pub mod error;
+pub mod progress;
+
+pub use error::{ParamError, Result};
+pub use progress::{NoProgress, Progress};

@@ -1,0 +1,1 @@
+//! Fractional Gaussian field synthesis (issue 3). See ARCHITECTURE.md.

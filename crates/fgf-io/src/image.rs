@@ -1,0 +1,166 @@
+//! Image output: linear float32 EXR (scanline layout, readable by every
+//! viewer and by Mitsuba's `Bitmap`) and 8-bit PNG previews
+//! (exposure, then clamp, then the sRGB transfer curve).
+//!
+//! Pixel buffers are row-major from the top-left corner, interleaved
+//! channels: index `(y * width + x) * channels + c`.
+
+use crate::{atomic_write, IoError, Result};
+use std::path::Path;
+
+fn check_buffer(path: &Path, width: usize, height: usize, channels: usize, len: usize) -> Result<()> {
+    if width == 0 || height == 0 {
+        return Err(IoError::format(path, format!("cannot write a {width}x{height} image")));
+    }
+    if len != width * height * channels {
+        return Err(IoError::format(
+            path,
+            format!("buffer has {len} values, a {width}x{height}x{channels} image needs {}", width * height * channels),
+        ));
+    }
+    Ok(())
+}
+
+/// Write a linear float32 EXR with channels `R,G,B` (`channels == 3`) or a
+/// single channel `Y` (`channels == 1`), atomically.
+pub fn write_exr(path: &Path, width: usize, height: usize, channels: usize, data: &[f32]) -> Result<()> {
+    use exr::prelude::*;
+    check_buffer(path, width, height, channels, data.len())?;
+    let encoding = Encoding {
+        compression: Compression::ZIP16,
+        blocks: Blocks::ScanLines,
+        line_order: LineOrder::Increasing,
+    };
+    let size = (width, height);
+    atomic_write(path, |w| {
+        let result = match channels {
+            3 => {
+                let layer = Layer::new(
+                    size,
+                    LayerAttributes::default(),
+                    encoding,
+                    SpecificChannels::rgb(|p: Vec2<usize>| {
+                        let i = (p.y() * width + p.x()) * 3;
+                        (data[i], data[i + 1], data[i + 2])
+                    }),
+                );
+                Image::from_layer(layer).write().to_buffered(w)
+            }
+            1 => {
+                let layer = Layer::new(
+                    size,
+                    LayerAttributes::default(),
+                    encoding,
+                    SpecificChannels::build()
+                        .with_channel("Y")
+                        .with_pixel_fn(|p: Vec2<usize>| (data[p.y() * width + p.x()],)),
+                );
+                Image::from_layer(layer).write().to_buffered(w)
+            }
+            c => return Err(format!("EXR output supports 1 or 3 channels, not {c}")),
+        };
+        result.map_err(|e| e.to_string())
+    })
+}
+
+/// Read an RGB(A) EXR into `(width, height, rgb data)`; used by tests and
+/// by users comparing images.
+pub fn read_exr_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
+    use exr::prelude::*;
+    let image = read_first_rgba_layer_from_file(
+        path,
+        |res: Vec2<usize>, _| (res.width(), vec![0f32; res.width() * res.height() * 3]),
+        |(w, buf): &mut (usize, Vec<f32>), p: Vec2<usize>, (r, g, b, _a): (f32, f32, f32, f32)| {
+            let i = (p.y() * *w + p.x()) * 3;
+            buf[i] = r;
+            buf[i + 1] = g;
+            buf[i + 2] = b;
+        },
+    )
+    .map_err(|e| IoError::format(path, e.to_string()))?;
+    let size = image.layer_data.size;
+    let (_, buf) = image.layer_data.channel_data.pixels;
+    Ok((size.width(), size.height(), buf))
+}
+
+/// The sRGB transfer curve applied to a linear value already clamped to [0,1].
+#[inline]
+pub fn srgb_encode(v: f32) -> f32 {
+    if v <= 0.003_130_8 {
+        12.92 * v
+    } else {
+        1.055 * v.powf(1.0 / 2.4) - 0.055
+    }
+}
+
+/// Linear values to 8-bit sRGB: `v * 2^exposure`, clamp to [0,1], encode.
+/// NaN maps to 0.
+pub fn to_srgb8(data: &[f32], exposure: f32) -> Vec<u8> {
+    let scale = exposure.exp2();
+    data.iter()
+        .map(|&v| {
+            let v = (v * scale).clamp(0.0, 1.0);
+            let v = if v.is_nan() { 0.0 } else { v };
+            (srgb_encode(v) * 255.0 + 0.5) as u8
+        })
+        .collect()
+}
+
+/// Write 8-bit PNG (`channels` 1 = grey, 3 = RGB) atomically; `data` is
+/// already encoded.
+pub fn write_png8(path: &Path, width: usize, height: usize, channels: usize, data: &[u8]) -> Result<()> {
+    check_buffer(path, width, height, channels, data.len())?;
+    let color = match channels {
+        1 => png::ColorType::Grayscale,
+        3 => png::ColorType::Rgb,
+        c => return Err(IoError::format(path, format!("PNG output supports 1 or 3 channels, not {c}"))),
+    };
+    atomic_write(path, |w| {
+        let mut enc = png::Encoder::new(w, width as u32, height as u32);
+        enc.set_color(color);
+        enc.set_depth(png::BitDepth::Eight);
+        let mut writer = enc.write_header().map_err(|e| e.to_string())?;
+        writer.write_image_data(data).map_err(|e| e.to_string())?;
+        writer.finish().map_err(|e| e.to_string())
+    })
+}
+
+/// Write a linear image as an sRGB PNG preview (exposure in stops).
+pub fn write_png_preview(path: &Path, width: usize, height: usize, channels: usize, data: &[f32], exposure: f32) -> Result<()> {
+    check_buffer(path, width, height, channels, data.len())?;
+    write_png8(path, width, height, channels, &to_srgb8(data, exposure))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn exr_round_trip_is_exact() {
+        let (w, h) = (7, 5);
+        let data: Vec<f32> = (0..w * h * 3).map(|i| i as f32 * 0.125 + 1e-3).collect();
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.exr");
+        write_exr(&p, w, h, 3, &data).unwrap();
+        let (rw, rh, back) = read_exr_rgb(&p).unwrap();
+        assert_eq!((rw, rh), (w, h));
+        assert_eq!(back, data);
+    }
+
+    #[test]
+    fn png_writes_and_bad_size_leaves_no_file() {
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("a.png");
+        write_png_preview(&p, 2, 2, 3, &[0.0, 0.5, 1.0, 2.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8], 0.0).unwrap();
+        assert!(p.exists());
+        let q = dir.path().join("b.png");
+        assert!(write_png_preview(&q, 2, 2, 3, &[0.0; 5], 0.0).is_err());
+        assert!(!q.exists());
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temp file left behind");
+    }
+
+    #[test]
+    fn srgb_curve_end_points() {
+        assert_eq!(to_srgb8(&[0.0, 1.0, 5.0, f32::NAN, -1.0], 0.0), vec![0, 255, 255, 0, 0]);
+    }
+}

@@ -1,0 +1,76 @@
+//! # fgf-io
+//!
+//! File formats shared by the field synthesis and the renderer:
+//!
+//! * [`vol`]: Mitsuba 3 `.vol` grids (read and write; layout in `formats.md`).
+//! * [`image`]: linear float32 RGB/greyscale EXR (scanlines) and 8-bit PNG.
+//! * [`atomic_write`]: every writer goes through a temporary file in the
+//!   target directory and a rename, so a failed or interrupted write never
+//!   leaves a half-written file and never clobbers the user's old file.
+
+pub mod image;
+pub mod vol;
+
+use std::io::Write;
+use std::path::{Path, PathBuf};
+
+/// An I/O or format error, always naming the file.
+#[derive(Debug, thiserror::Error)]
+pub enum IoError {
+    #[error("{path}: {source}")]
+    Io {
+        path: PathBuf,
+        #[source]
+        source: std::io::Error,
+    },
+    #[error("{path}: {msg}")]
+    Format { path: PathBuf, msg: String },
+}
+
+impl IoError {
+    pub fn io(path: &Path, source: std::io::Error) -> Self {
+        IoError::Io {
+            path: path.to_path_buf(),
+            source,
+        }
+    }
+    pub fn format(path: &Path, msg: impl Into<String>) -> Self {
+        IoError::Format {
+            path: path.to_path_buf(),
+            msg: msg.into(),
+        }
+    }
+}
+
+pub type Result<T, E = IoError> = std::result::Result<T, E>;
+
+/// Write a file atomically: `fill` writes into a temporary file created next
+/// to `path`; only if it succeeds is the temporary file renamed over `path`.
+/// On any error the temporary file is removed and `path` is untouched.
+pub fn atomic_write<F>(path: &Path, fill: F) -> Result<()>
+where
+    F: FnOnce(&mut std::io::BufWriter<&std::fs::File>) -> std::result::Result<(), String>,
+{
+    let dir = match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+        _ => PathBuf::from("."),
+    };
+    if !dir.is_dir() {
+        return Err(IoError::format(
+            path,
+            format!("output directory {} does not exist", dir.display()),
+        ));
+    }
+    let tmp = tempfile::Builder::new()
+        .prefix(".fgf-tmp-")
+        .tempfile_in(&dir)
+        .map_err(|e| IoError::io(path, e))?;
+    {
+        let mut w = std::io::BufWriter::new(tmp.as_file());
+        fill(&mut w).map_err(|msg| IoError::format(path, msg))?;
+        w.flush().map_err(|e| IoError::io(path, e))?;
+    }
+    tmp.as_file().sync_all().map_err(|e| IoError::io(path, e))?;
+    tmp.persist(path).map_err(|e| IoError::io(path, e.error))?;
+    Ok(())
+}

@@ -1,0 +1,232 @@
+//! The plain-data scene description: what the XML loader produces and the
+//! renderer consumes. Everything is already resolved: `$name` defaults are
+//! substituted, references are indices, file paths are loaded, transforms
+//! are composed, units are Mitsuba's (degrees for angles, radiance in W/(m² sr)).
+//!
+//! Colours are linear RGB (`[f32; 3]`); a float in the XML becomes a grey RGB.
+//! Matrices are `glam::Mat4` (column-major in memory, `M * p` convention);
+//! a `to_world` maps the plugin's local space to world space.
+
+use glam::{Mat4, Vec3};
+use std::sync::Arc;
+
+pub type Rgb = [f32; 3];
+
+/// Index into [`SceneDesc::media`].
+pub type MediumId = usize;
+/// Index into [`SceneDesc::bsdfs`].
+pub type BsdfId = usize;
+
+#[derive(Debug, Clone)]
+pub struct SceneDesc {
+    /// The scene file this was loaded from (for messages).
+    pub source: String,
+    pub integrator: IntegratorDesc,
+    pub sensor: SensorDesc,
+    pub shapes: Vec<ShapeDesc>,
+    /// Every BSDF; shapes refer to them by index (shared `<ref>` gives the same index).
+    pub bsdfs: Vec<BsdfDesc>,
+    /// Emitters that are not attached to a shape: point, spot, directional, constant.
+    pub emitters: Vec<EmitterDesc>,
+    pub media: Vec<MediumDesc>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum IntegratorKind {
+    /// `volpath`: volumetric path tracing with NEE + MIS.
+    Volpath,
+    /// `path`: surfaces only; a scene with media and `path` is rejected by the loader.
+    Path,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct IntegratorDesc {
+    pub kind: IntegratorKind,
+    /// Mitsuba's `max_depth`: -1 is unbounded; 1 = directly visible emission only.
+    pub max_depth: i32,
+    /// Russian roulette starts at this depth (Mitsuba default 5).
+    pub rr_depth: u32,
+    /// Mitsuba's `hide_emitters` (default false).
+    pub hide_emitters: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum FovAxis {
+    X,
+    Y,
+    Smaller,
+    Larger,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum FilterDesc {
+    /// Box of radius 0.5 pixel.
+    Box,
+    /// Gaussian with `stddev` (Mitsuba default 0.5) and radius 4·stddev.
+    Gaussian { stddev: f32 },
+    /// Tent of `radius` (Mitsuba default 1).
+    Tent { radius: f32 },
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct SensorDesc {
+    /// Camera-to-world; the camera looks down local +z, local +y is up, and
+    /// image x grows toward local -x (Mitsuba's `lookat` convention).
+    pub to_world: Mat4,
+    /// Field of view in degrees, along `fov_axis`.
+    pub fov: f32,
+    pub fov_axis: FovAxis,
+    pub near_clip: f32,
+    pub far_clip: f32,
+    pub width: u32,
+    pub height: u32,
+    pub rfilter: FilterDesc,
+    /// Samples per pixel (`independent.sample_count`).
+    pub spp: u32,
+    /// Sampler seed (`independent.seed`, default 0).
+    pub seed: u64,
+    /// The medium the camera sits in.
+    pub medium: Option<MediumId>,
+}
+
+#[derive(Debug, Clone)]
+pub enum GeometryDesc {
+    /// `cube`: `[-1,1]^3` in local space.
+    Cube,
+    /// `rectangle`: `[-1,1]^2` in local xy, normal +z.
+    Rectangle,
+    /// `sphere`: `center` and `radius` in local space (then `to_world`),
+    /// kept explicit so the renderer can intersect analytically.
+    Sphere { center: Vec3, radius: f32 },
+    /// `disk`: unit disk in local xy, normal +z.
+    Disk,
+    /// `obj` / `ply`: a triangle mesh, in local space (apply `to_world`).
+    Mesh(Arc<TriangleMesh>),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub struct TriangleMesh {
+    pub positions: Vec<Vec3>,
+    /// Per-vertex normals, if the file has them (`face_normals=true` drops them).
+    pub normals: Option<Vec<Vec3>>,
+    pub indices: Vec<[u32; 3]>,
+}
+
+#[derive(Debug, Clone)]
+pub struct ShapeDesc {
+    /// `type`, `id` and the file/line for messages.
+    pub name: String,
+    pub geometry: GeometryDesc,
+    pub to_world: Mat4,
+    pub flip_normals: bool,
+    /// Mitsuba gives a shape with no BSDF a diffuse BSDF of reflectance 0.5;
+    /// the loader makes that explicit, so this is always set.
+    pub bsdf: BsdfId,
+    /// An `area` emitter attached to this shape.
+    pub emitter: Option<EmitterDesc>,
+    pub interior: Option<MediumId>,
+    pub exterior: Option<MediumId>,
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum BsdfDesc {
+    Diffuse { reflectance: Rgb },
+    /// Index-matched boundary: rays pass straight through.
+    Null,
+    /// Smooth dielectric (`int_ior`, `ext_ior` as numbers; named materials resolved).
+    Dielectric { int_ior: f32, ext_ior: f32, specular_reflectance: Rgb, specular_transmittance: Rgb },
+    /// Smooth conductor: complex index `eta + i k` per channel (a named
+    /// `material` resolved to RGB; Mitsuba's `none` is a perfect mirror,
+    /// encoded as `eta = 0, k = 1` with `perfect_mirror = true`).
+    Conductor { eta: Rgb, k: Rgb, specular_reflectance: Rgb, perfect_mirror: bool },
+    /// `twosided`: the nested BSDF on both sides.
+    TwoSided(Box<BsdfDesc>),
+}
+
+#[derive(Debug, Clone, PartialEq)]
+pub enum EmitterDesc {
+    /// On a shape; emits toward the side the normal points to.
+    Area { radiance: Rgb },
+    /// `point`: `position` (or the translation of `to_world`), `intensity` in W/sr.
+    Point { position: Vec3, intensity: Rgb },
+    /// `spot`: `to_world` (looks down local +z), `intensity`, `cutoff_angle`
+    /// and `beam_width` in degrees (Mitsuba defaults 20 and 0.75·cutoff).
+    Spot { to_world: Mat4, intensity: Rgb, cutoff_angle: f32, beam_width: f32 },
+    /// `directional`: unit `direction` the light travels along, `irradiance`.
+    Directional { direction: Vec3, irradiance: Rgb },
+    /// `constant`: environment radiance from every direction.
+    Constant { radiance: Rgb },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PhaseDesc {
+    Isotropic,
+    /// Henyey–Greenstein with mean cosine `g` in (-1, 1).
+    Hg { g: f32 },
+}
+
+/// A 3D texture: a constant or a `gridvolume`.
+#[derive(Debug, Clone)]
+pub enum VolumeDesc {
+    Constant(Rgb),
+    Grid(GridVolumeDesc),
+}
+
+#[derive(Debug, Clone)]
+pub struct GridVolumeDesc {
+    pub grid: Arc<fgf_io::vol::VolGrid>,
+    /// Volume-space to world. Unless `use_grid_bbox`, the grid spans the unit
+    /// cube `[0,1]^3` in volume space; with it, the file's bounding box.
+    pub to_world: Mat4,
+    pub use_grid_bbox: bool,
+    pub filter: GridFilter,
+    /// Mitsuba's `wrap_mode`; only `clamp` (the default) is supported.
+    pub wrap_clamp: bool,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum GridFilter {
+    Trilinear,
+    Nearest,
+}
+
+/// Which transport kernel a non-exponential medium uses (`theory.md` §4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum KernelDesc {
+    /// Guo 2019 / Jarabo 2018: free flights from p = -dTr/dt, shadow rays use Tr.
+    EnergyConserving,
+    /// Bitterli 2018: T_ss, T_sm, T_ms, T_mm by segment start/end kind.
+    Reciprocal,
+}
+
+/// The statistical transmittance model of a non-exponential medium.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum TransmittanceDesc {
+    /// `fgf` plugin: `hurst`, `sw`, optional `length` (k-fBm only; default:
+    /// the diagonal of the bounding box of the shapes bounding this medium).
+    Fgf { hurst: f64, sw: f64, length: Option<f64> },
+    /// `nonexponential` with `transmittance="exponential"`.
+    Exponential,
+    /// `nonexponential` with `transmittance="davis"`, parameter `alpha`.
+    Davis { alpha: f64 },
+    /// `nonexponential` with `transmittance="davis_weinstein"`, `h`, `c`.
+    DavisWeinstein { h: f64, c: f64 },
+}
+
+#[derive(Debug, Clone)]
+pub enum MediumDesc {
+    /// `homogeneous`: `sigma_t` already multiplied by `scale`.
+    Homogeneous { sigma_t: Rgb, albedo: Rgb, phase: PhaseDesc },
+    /// `heterogeneous`: `sigma_t(x) = scale * sigma_t_volume(x)`.
+    Heterogeneous { sigma_t: VolumeDesc, albedo: VolumeDesc, scale: f32, phase: PhaseDesc },
+    /// `fgf` and `nonexponential`: mean extinction `sigma_t` (already scaled),
+    /// optional macro-scale `density` grid multiplying it.
+    NonExponential {
+        sigma_t: Rgb,
+        albedo: Rgb,
+        phase: PhaseDesc,
+        model: TransmittanceDesc,
+        kernel: KernelDesc,
+        density: Option<GridVolumeDesc>,
+    },
+}

@@ -1,0 +1,6 @@
+//! Scene description and loading.
+
+pub mod desc;
+pub mod xml;
+
+pub use desc::*;

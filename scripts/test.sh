@@ -1,0 +1,14 @@
+#!/usr/bin/env bash
+# Install everything and run every test: Rust unit/property tests, the Python
+# suite, then the slow statistical tests in their own release-mode step.
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bash scripts/setup.sh --test
+. .venv/bin/activate
+echo "== cargo test (workspace)"
+cargo test --workspace --exclude fgf-py --release
+echo "== pytest (fast)"
+python -m pytest -q -m "not slow"
+echo "== slow statistical tests"
+cargo test --workspace --exclude fgf-py --release -- --ignored
+python -m pytest -q -m slow
