@@ -76,9 +76,14 @@ pub fn parse_vol(path: &Path, b: &[u8]) -> Result<VolGrid> {
     if !matches!(nc, 1 | 3 | 6) {
         return Err(err(format!("channels = {nc}, must be 1, 3 or 6")));
     }
-    let count = (nx as u64) * (ny as u64) * (nz as u64) * (nc as u64);
-    let expect = HEADER as u64 + 4 * count;
-    if b.len() as u64 != expect {
+    // Checked products: a hostile header (e.g. 1e9^3 voxels) must give an
+    // error, not an overflow.
+    let expect = [ny, nz, nc, 4]
+        .iter()
+        .try_fold(nx as u64, |acc, &v| acc.checked_mul(v as u64))
+        .and_then(|n| n.checked_add(HEADER as u64));
+    if expect != Some(b.len() as u64) {
+        let expect = expect.map_or("more than 2^64".to_string(), |n| n.to_string());
         return Err(err(format!(
             "file is {} bytes but a {nx}x{ny}x{nz} grid with {nc} channel(s) needs {expect}",
             b.len()
@@ -171,6 +176,20 @@ mod tests {
         assert_eq!(std::fs::metadata(&p).unwrap().len(), 48 + 4 * 72);
         assert_eq!(read_vol(&p).unwrap(), grid);
         assert_eq!(grid.at(2, 1, 3, 1), grid.data[((3 * 2 + 1) * 3 + 2) * 3 + 1]);
+    }
+
+    #[test]
+    fn huge_header_is_an_error_not_an_overflow() {
+        let mut b = vec![0u8; 48];
+        b[0..3].copy_from_slice(b"VOL");
+        b[3] = 3;
+        b[4..8].copy_from_slice(&1i32.to_le_bytes());
+        for off in [8, 12, 16] {
+            b[off..off + 4].copy_from_slice(&i32::MAX.to_le_bytes());
+        }
+        b[20..24].copy_from_slice(&6i32.to_le_bytes());
+        let e = parse_vol(Path::new("h.vol"), &b).unwrap_err().to_string();
+        assert!(e.contains("2^64"), "{e}");
     }
 
     #[test]
