@@ -7,3 +7,5 @@ bash scripts/setup.sh
 mkdir -p out
 fgf transmittance --sigma-t 4 --hurst -0.1 --sw 4 -o out/transmittance.png
 echo "demo: wrote out/transmittance.png"
+fgf render scenes/default.xml -o out/default.exr --png out/default.png
+echo "demo: wrote out/default.exr and out/default.png"

@@ -11,8 +11,14 @@
 //! * constructors validate and return [`ParamError`] naming the parameter and
 //!   its valid range; nothing is silently clamped.
 
+// `!(t >= 0.0)` is used on purpose: it is true for NaN, which must take
+// the invalid-input branch; `partial_cmp` would only obscure that.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
 pub mod error;
 pub mod progress;
+pub mod stats;
+pub mod transmittance;
 
 pub use error::{ParamError, Result};
 pub use progress::{NoProgress, Progress};

@@ -6,6 +6,7 @@
 
 use pyo3::prelude::*;
 
+mod ensemble;
 mod errors;
 mod field;
 mod progress;
@@ -24,5 +25,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     transmittance::register(m)?;
     field::register(m)?;
     render::register(m)?;
+    ensemble::register(m)?;
     Ok(())
 }

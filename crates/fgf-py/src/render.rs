@@ -1,7 +1,130 @@
-//! Python bindings for the render area.
+//! Python bindings for the render area: `render_scene` (behind
+//! `fgf.render`), `write_exr`, `write_png`.
 
+use crate::errors::{io_err, ParameterError, SceneError};
+use crate::progress::run_job;
+use fgf_render::scene::SceneErrorKind;
+use fgf_render::{RenderError, RenderOptions};
+use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
+use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
+use std::path::PathBuf;
 
-pub fn register(_m: &Bound<'_, PyModule>) -> PyResult<()> {
+fn scene_err(e: fgf_render::scene::SceneError) -> PyErr {
+    match e.kind {
+        SceneErrorKind::Io => PyOSError::new_err(e.to_string()),
+        _ => SceneError::new_err(e.to_string()),
+    }
+}
+
+fn render_err(e: RenderError, source: &str) -> PyErr {
+    match e {
+        RenderError::InvalidOption(_) => ParameterError::new_err(e.to_string()),
+        _ => SceneError::new_err(format!("{source}: {e}")),
+    }
+}
+
+fn to_hw3<'py>(py: Python<'py>, data: Vec<f32>, h: usize, w: usize) -> PyResult<Bound<'py, PyAny>> {
+    Ok(PyArray1::from_vec(py, data).reshape([h, w, 3])?.into_any())
+}
+
+/// Render a Mitsuba 3 XML scene. Returns `(image, variance or None,
+/// spp_done, interrupted)`; the typed wrapper is `fgf.render`.
+#[pyfunction]
+#[pyo3(signature = (scene, spp=None, seed=None, threads=None, defines=None, progress=None, return_variance=false))]
+#[allow(clippy::too_many_arguments)]
+fn render_scene<'py>(
+    py: Python<'py>,
+    scene: PathBuf,
+    spp: Option<u32>,
+    seed: Option<u64>,
+    threads: Option<usize>,
+    defines: Option<Vec<(String, String)>>,
+    progress: Option<Bound<'py, PyAny>>,
+    return_variance: bool,
+) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u32, bool)> {
+    if spp == Some(0) {
+        return Err(ParameterError::new_err(
+            "spp = 0; need at least 1 sample per pixel",
+        ));
+    }
+    if threads == Some(0) {
+        return Err(ParameterError::new_err(
+            "threads = 0; need at least 1 thread (or None for all cores)",
+        ));
+    }
+    let defines = defines.unwrap_or_default();
+    let desc = py
+        .detach(|| fgf_render::scene::load_file(&scene, &defines))
+        .map_err(scene_err)?;
+    let opts = RenderOptions {
+        spp,
+        seed,
+        variance: return_variance,
+        spp_per_pass: None,
+    };
+    let total_spp = spp.unwrap_or(desc.sensor.spp) as u64;
+    let total = desc.sensor.width as u64 * desc.sensor.height as u64 * total_spp;
+    let source = scene.display().to_string();
+    let job = run_job(py, total, "render", progress.as_ref(), |counter| {
+        let go = || fgf_render::render(&desc, &opts, counter);
+        match threads {
+            Some(t) => match rayon::ThreadPoolBuilder::new().num_threads(t).build() {
+                Ok(pool) => pool.install(go),
+                Err(e) => Err(RenderError::InvalidOption(format!(
+                    "cannot start {t} threads: {e}"
+                ))),
+            },
+            None => go(),
+        }
+    })?;
+    let interrupted = job.interrupted;
+    let out = job.value.map_err(|e| render_err(e, &source))?;
+    let img = to_hw3(py, out.image, out.height, out.width)?;
+    let var = match out.variance {
+        Some(v) => Some(to_hw3(py, v, out.height, out.width)?),
+        None => None,
+    };
+    Ok((img, var, out.spp_done, interrupted || out.interrupted))
+}
+
+fn image_data(img: &PyReadonlyArray3<'_, f32>) -> PyResult<(usize, usize, Vec<f32>)> {
+    let shape = img.shape();
+    if shape[2] != 3 {
+        return Err(ParameterError::new_err(format!(
+            "image has shape {shape:?}; expected (H, W, 3)"
+        )));
+    }
+    let data: Vec<f32> = img.as_array().iter().copied().collect();
+    Ok((shape[0], shape[1], data))
+}
+
+/// Write an `(H, W, 3)` float32 image as a linear float32 EXR (atomically).
+#[pyfunction]
+fn write_exr(py: Python<'_>, path: PathBuf, img: PyReadonlyArray3<'_, f32>) -> PyResult<()> {
+    let (h, w, data) = image_data(&img)?;
+    py.detach(|| fgf_io::image::write_exr(&path, w, h, 3, &data))
+        .map_err(io_err)
+}
+
+/// Write an `(H, W, 3)` float32 linear image as an 8-bit sRGB PNG preview
+/// (`exposure` in stops), atomically.
+#[pyfunction]
+#[pyo3(signature = (path, img, exposure=0.0))]
+fn write_png(
+    py: Python<'_>,
+    path: PathBuf,
+    img: PyReadonlyArray3<'_, f32>,
+    exposure: f32,
+) -> PyResult<()> {
+    let (h, w, data) = image_data(&img)?;
+    py.detach(|| fgf_io::image::write_png_preview(&path, w, h, 3, &data, exposure))
+        .map_err(io_err)
+}
+
+pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(render_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(write_exr, m)?)?;
+    m.add_function(wrap_pyfunction!(write_png, m)?)?;
     Ok(())
 }

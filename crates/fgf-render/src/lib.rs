@@ -8,5 +8,24 @@
 //!   produces it; the renderer consumes it. It is the only contract between
 //!   the two halves.
 //! * [`scene::xml`]: the Mitsuba 3 XML loader.
+//! * [`render`](mod@render): the renderer's entry point, from a `SceneDesc` to pixels;
+//!   [`integrator`] (volumetric path tracing), [`medium`] (the medium
+//!   interface, homogeneous and grid media), [`geometry`] (shapes, BVH),
+//!   [`bsdf`], [`emitter`], [`phase`], [`camera`], [`film`], [`math`].
 
 pub mod scene;
+
+pub mod bsdf;
+pub mod camera;
+pub mod emitter;
+/// Ground truth from explicit realizations of `fgf` media (issue 5).
+pub mod ensemble;
+pub mod film;
+pub mod geometry;
+pub mod integrator;
+pub mod math;
+pub mod medium;
+pub mod phase;
+pub mod render;
+
+pub use render::{render, RenderError, RenderOptions, RenderOutput};

@@ -1,14 +1,87 @@
-"""`fgf render`: placeholder until its issue lands."""
+"""`fgf render`: render a Mitsuba 3 XML scene to a linear float32 EXR and an sRGB PNG preview.
+
+    fgf render scene.xml -o out.exr [--spp N] [--seed S] [--threads T]
+               [-D name=value]... [--variance var.exr] [--png out.png] [--quiet]
+
+Ctrl-C stops after the pass of samples in flight and writes the image of
+the samples finished so far (every pixel has the same count), saying how
+many; the exit code is then 130.
+"""
 
 from __future__ import annotations
 
+import sys
+import time
+from pathlib import Path
+
 
 def register(sub) -> None:
-    p = sub.add_parser("render", help="(not yet implemented)")
+    p = sub.add_parser(
+        "render",
+        help="render a Mitsuba 3 XML scene (volumetric path tracing)",
+        description=__doc__.split("\n\n")[0],
+    )
+    p.add_argument("scene", help="Mitsuba 3 XML scene file")
+    p.add_argument("-o", "--output", required=True, help="output EXR (linear float32 RGB)")
+    p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's sample_count)")
+    p.add_argument("--seed", type=int, default=None, help="sampler seed (default: the scene's, else 0)")
+    p.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
+    p.add_argument(
+        "-D",
+        dest="defines",
+        action="append",
+        default=[],
+        metavar="NAME=VALUE",
+        help="override a <default> of the scene (repeatable)",
+    )
+    p.add_argument("--variance", default=None, metavar="VAR.EXR", help="also write the per-pixel variance of the mean")
+    p.add_argument("--png", default=None, help="PNG preview path (default: the EXR path with .png)")
+    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default 0)")
+    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from .. import FgfError
+    from .. import ParameterError, _core
+    from ..render import _defines_list
 
-    raise FgfError("'fgf render' is not implemented yet")
+    if args.spp is not None and args.spp < 1:
+        raise ParameterError(f"--spp {args.spp}: need at least 1 sample per pixel")
+    if args.threads is not None and args.threads < 1:
+        raise ParameterError(f"--threads {args.threads}: need at least 1 thread")
+    defines = _defines_list(args.defines)
+    out = Path(args.output)
+    png = Path(args.png) if args.png else out.with_suffix(".png")
+    t0 = time.perf_counter()
+    img, var, done, interrupted = _core.render_scene(
+        args.scene,
+        spp=args.spp,
+        seed=args.seed,
+        threads=args.threads,
+        defines=defines,
+        progress=None if args.quiet else "bar",
+        return_variance=args.variance is not None,
+    )
+    elapsed = time.perf_counter() - t0
+    if done == 0:
+        print("fgf render: interrupted before the first pass finished; nothing written", file=sys.stderr)
+        return 130
+    _core.write_exr(str(out), img)
+    _core.write_png(str(png), img, args.exposure)
+    if var is not None:
+        _core.write_exr(args.variance, var)
+    written = ", ".join(str(p) for p in [out, png] + ([args.variance] if var is not None else []))
+    h, w = img.shape[:2]
+    if interrupted:
+        print(
+            f"fgf render: interrupted; wrote the image of {done} samples per pixel to {written}",
+            file=sys.stderr,
+        )
+        return 130
+    if not args.quiet:
+        rate = w * h * done / max(elapsed, 1e-9)
+        print(
+            f"fgf render: {w}x{h}, {done} spp in {elapsed:.1f} s ({rate / 1e6:.2f} M samples/s); wrote {written}",
+            file=sys.stderr,
+        )
+    return 0

@@ -73,7 +73,8 @@ pub struct SensorDesc {
     /// Camera-to-world; the camera looks down local +z, local +y is up, and
     /// image x grows toward local -x (Mitsuba's `lookat` convention).
     pub to_world: Mat4,
-    /// Field of view in degrees, along `fov_axis`.
+    /// Field of view in degrees, along `fov_axis` (a `focal_length` in the
+    /// XML is converted to the x field of view, with `fov_axis = X`).
     pub fov: f32,
     pub fov_axis: FovAxis,
     pub near_clip: f32,
@@ -174,6 +175,9 @@ pub enum VolumeDesc {
 
 #[derive(Debug, Clone)]
 pub struct GridVolumeDesc {
+    /// The loaded grid: 1 or 3 channels (6-channel grids are refused), every
+    /// value checked by the loader (`sigma_t` and `density` >= 0, `albedo` in
+    /// [0, 1]); its to_world is invertible in f32.
     pub grid: Arc<fgf_io::vol::VolGrid>,
     /// Volume-space to world. Unless `use_grid_bbox`, the grid spans the unit
     /// cube `[0,1]^3` in volume space; with it, the file's bounding box.
@@ -204,6 +208,10 @@ pub enum KernelDesc {
 pub enum TransmittanceDesc {
     /// `fgf` plugin: `hurst`, `sw`, optional `length` (k-fBm only; default:
     /// the diagonal of the bounding box of the shapes bounding this medium).
+    /// The loader resolves the default: `length` is always `Some` for k-fBm
+    /// (`hurst > 0`) and always `None` for white and pink noise, and the
+    /// parameters were accepted by `fgf_core::transmittance::Fgf::new` for
+    /// every channel's `sigma_t`.
     Fgf { hurst: f64, sw: f64, length: Option<f64> },
     /// `nonexponential` with `transmittance="exponential"`.
     Exponential,

@@ -1,0 +1,718 @@
+//! Non-exponential transmittance models (`theory.md` §3–4).
+//!
+//! Four models, one file each: [`Exponential`], [`Fgf`] (the gamma closure
+//! of Guo et al. 2019: white, pink, k-fBm), [`Davis`] and [`DavisWeinstein`]
+//! (Bitterli et al. 2018). [`Model`] is the closed enum the renderer stores,
+//! one per RGB channel; it dispatches by `match`, is `Copy` and never
+//! allocates.
+//!
+//! # Conventions
+//!
+//! Everything is in **distance units** for a given mean extinction
+//! `sigma_t = σ_m` (1/length): `t` is a distance, `tr(t)` is dimensionless,
+//! `pdf(t)` and the `*_medium` functions are densities in 1/length.
+//! With `Tr = T_ss` (`theory.md` §4):
+//!
+//! | method | meaning |
+//! |---|---|
+//! | `tr(t)` = `surface_surface(t)` | `T_ss(t)`: a segment from a surface reaches a surface |
+//! | `pdf(t)` = `surface_medium(t)` | `T_sm = -dTr/dt`: free-flight pdf from a surface (energy-conserving kernel's `p`) |
+//! | `sigma_bar()` | `σ̄ = T_sm(0)` |
+//! | `medium_surface(t)` | `T_ms = T_sm / σ̄`: a segment from a medium vertex reaches a surface |
+//! | `medium_medium(t)` | `T_mm = -dT_ms/dt`: free-flight pdf from a medium vertex |
+//! | `sample_surface(u)` | inverse of the cdf `1 - T_ss` |
+//! | `sample_medium(u)` | inverse of the cdf `1 - T_ms` |
+//!
+//! Medium–medium connections in the reciprocal kernel use `T_mm / σ̄`
+//! (Bitterli's `eval` divides by `sigmaBar`); that division is the caller's.
+//!
+//! Domain: `t ≥ 0` including `t = +inf` (`tr = pdf = T_ms = T_mm = 0`);
+//! `t < 0` or NaN gives NaN. Samplers take `u ∈ [0, 1)`; `u = 0` gives
+//! `t = 0`. A sampler returns `f64::INFINITY` when the distance exceeds the
+//! largest `f64` (e.g. Davis with a tiny `alpha`, where the tail is so heavy
+//! that the flight escapes any scene): the renderer treats it as "no
+//! collision". `medium_medium(0)` is `+inf` for pink noise and
+//! Davis–Weinstein with `1/2 < h < 1`: `T_mm ~ t^(2H)` is integrably singular
+//! at the origin.
+//!
+//! # One parametrisation for all models
+//!
+//! Every model is a gamma closure `Tr = (1 + x)^(-α)` whose ratio
+//! `x(t) = σ_m t / α(t) = t var[σ̄_t] / σ_m` is a power of `t`:
+//! `x = k t^e` with `e ∈ [0, 1]`. Then, with `τ = σ_m t` and
+//! `g(x) = ln(1+x)/x` (`g(0) = 1`),
+//!
+//! ```text
+//! ln Tr = -α ln(1+x) = -τ g(x)
+//! T_sm  = σ_m Tr q(x),            q(x) = (1-e) g(x) + e/(1+x)
+//! T_mm  = (σ_m Tr / σ̄) [σ_m q² + e x (-q'(x)) / t]
+//! ```
+//!
+//! | model | `e` | `k` |
+//! |---|---|---|
+//! | exponential | any (`k = 0`) | 0 |
+//! | white noise (`H = -1/2`), DW `h = 1/2` | 0 | `S_w/σ_m`, `c` |
+//! | pink noise, DW | `1 + 2H = 2h - 1` | `S_p/σ_m = c^(2h) σ_m^(2h-1)` |
+//! | k-fBm, Davis | 1 | `S_kf L^(2H)/σ_m = σ_m/α` |
+//!
+//! Writing `ln Tr = -τ g(x)` is the stable form of `α log1p(σ_m t/α)`: it
+//! has no `0 · ∞` when `α → 0` (white/pink as `t → 0`, Davis with tiny
+//! `alpha`) and reduces to `-σ_m t` when `α → ∞` (`x → 0`).
+
+mod davis;
+mod davis_weinstein;
+mod exponential;
+mod fgf;
+
+pub use davis::Davis;
+pub use davis_weinstein::DavisWeinstein;
+pub use exponential::Exponential;
+pub use fgf::Fgf;
+
+/// `g(x) = ln(1+x)/x`, `g(0) = 1`, `g(∞) = 0`. `ln_1p` keeps full relative
+/// accuracy for small `x`, so no series is needed here.
+#[inline]
+pub(crate) fn g(x: f64) -> f64 {
+    if x == 0.0 {
+        1.0
+    } else if x.is_infinite() {
+        0.0
+    } else {
+        x.ln_1p() / x
+    }
+}
+
+/// Below this `x`, `g - 1` and `-g'` use their Taylor series: the direct forms
+/// lose about `ε / x` relative accuracy by cancellation (4e-15 at `x = 0.1`),
+/// the 17-term series truncates at `0.1^17`.
+const SERIES_X: f64 = 0.1;
+const SERIES_TERMS: u32 = 17;
+
+/// `g(x) - 1 = Σ_{n≥1} (-1)^n x^n / (n+1)`, without cancellation at small `x`.
+#[inline]
+pub(crate) fn g_minus_1(x: f64) -> f64 {
+    if x < SERIES_X {
+        // Horner on Σ_{m≥0} (-1)^(m+1) x^m / (m+2), times x.
+        let mut s = 0.0;
+        for m in (0..SERIES_TERMS).rev() {
+            let c = 1.0 / (m as f64 + 2.0);
+            s = s * x + if m % 2 == 0 { -c } else { c };
+        }
+        s * x
+    } else {
+        g(x) - 1.0
+    }
+}
+
+/// `x (-g'(x)) = g(x) - 1/(1+x) ≥ 0`, series `Σ_{m≥0} (-1)^m (m+1) x^(m+1) / (m+2)`
+/// below [`SERIES_X`]; tends to 0 as `x → ∞`.
+#[inline]
+fn x_neg_dg(x: f64) -> f64 {
+    if x < SERIES_X {
+        let mut s = 0.0;
+        for m in (0..SERIES_TERMS).rev() {
+            let c = (m as f64 + 1.0) / (m as f64 + 2.0);
+            s = s * x + if m % 2 == 0 { c } else { -c };
+        }
+        s * x
+    } else if x.is_infinite() {
+        0.0
+    } else {
+        g(x) - 1.0 / (1.0 + x)
+    }
+}
+
+/// Stopping tolerance of the pink-noise surface sampler, on the step in
+/// `s = ln t` (so relative on `t`). Its iteration is Householder's
+/// third-order method (fourth-order convergence): the error left after a
+/// final step `δ` is about `K δ⁴` with `K ≲ 0.1` here, so a step below 1e-3
+/// leaves a relative error ≲ 1e-13 on `t` (checked by the round-trip tests
+/// to 1e-11 on `-ln Tr`).
+pub const SURFACE_TOL: f64 = 1e-3;
+/// Stopping tolerance of the pink-noise medium sampler (Halley's method,
+/// cubic convergence) on the step in `ln t`: the error left after a final
+/// step `δ` is about `K δ³` with `K ≲ 1`, so ≲ 3e-14 relative on `t`.
+pub const MEDIUM_TOL: f64 = 3e-5;
+/// Width of the bracket in `ln t` at which the bisection fallback stops
+/// (relative error ≤ 5e-13 on `t`); reached only when Newton/Halley steps
+/// keep leaving the bracket.
+pub const BISECT_TOL: f64 = 1e-12;
+/// Iteration cap of the root finders: bisection alone needs at most
+/// `log2(1460 / 1e-12) ≈ 51` halvings of the widest bracket
+/// `[S_MIN, S_MAX]`, plus at most 11 doubling steps to find it, so 100
+/// bounds every case; typical samples take 2–3 (surface) or 3–5 (medium)
+/// evaluations.
+pub const SAMPLE_MAX_ITER: u32 = 100;
+/// `ln t` below which `t` underflows to 0 and above which it overflows.
+const S_MIN: f64 = -745.2;
+const S_MAX: f64 = 709.78;
+
+/// Safeguarded Newton-type iteration for an increasing `φ(s)` given by
+/// `f(s) = [φ, φ', φ'', φ''']` (zeros for unknown higher derivatives),
+/// started at `s0` inside the bracket `(lo, hi)` (either end may be ±inf:
+/// unknown).
+///
+/// Each evaluation shrinks the bracket by the sign of `φ`. The step is
+/// [`householder_step`] (Newton when the higher derivatives are 0). A step
+/// whose size is below `tol` ends the iteration (tested before the
+/// bracket, since at the root rounding may put the step on an end); a step
+/// that leaves the bracket, or is not finite, is replaced by bisection (or
+/// by doubling steps while one end is still unknown), which stops when the
+/// bracket is narrower than [`BISECT_TOL`]. Returns `s`, or `±inf` when the
+/// root is beyond `t`'s range. Never loops more than [`SAMPLE_MAX_ITER`]
+/// times.
+#[inline]
+pub(crate) fn solve_increasing(
+    f: impl Fn(f64) -> [f64; 4],
+    s0: f64,
+    mut lo: f64,
+    mut hi: f64,
+    tol: f64,
+) -> f64 {
+    lo = lo.max(S_MIN);
+    hi = hi.min(S_MAX);
+    if !(lo < hi) {
+        return 0.5 * (lo + hi);
+    }
+    let mut s = s0.clamp(lo, hi);
+    let mut expand = 1.0;
+    for _ in 0..SAMPLE_MAX_ITER {
+        let d = f(s);
+        let phi = d[0];
+        if phi == 0.0 {
+            return s;
+        }
+        // The root lies beyond the range of t: overflow to inf / underflow to 0.
+        if phi < 0.0 && s >= S_MAX {
+            return f64::INFINITY;
+        }
+        if phi > 0.0 && s <= S_MIN {
+            return f64::NEG_INFINITY;
+        }
+        if phi < 0.0 {
+            lo = s;
+        } else {
+            hi = s;
+        }
+        let step = householder_step(d);
+        if step.abs() <= tol {
+            return s + step;
+        }
+        let candidate = s + step;
+        let next = if candidate.is_finite() && candidate > lo && candidate < hi {
+            candidate
+        } else if lo > S_MIN && hi < S_MAX {
+            0.5 * (lo + hi)
+        } else if phi < 0.0 {
+            // Root above s, upper end unknown: step up, doubling.
+            expand *= 2.0;
+            (s + expand).min(S_MAX)
+        } else {
+            expand *= 2.0;
+            (s - expand).max(S_MIN)
+        };
+        if hi - lo <= BISECT_TOL {
+            return 0.5 * (lo + hi);
+        }
+        s = next;
+    }
+    0.5 * (lo + hi)
+}
+
+/// Householder's third-order step from `[f, f', f'', f''']`:
+/// `δ = -(6 f f'² - 3 f² f'') / (6 f'³ - 6 f f' f'' + f² f''')`, which reduces
+/// to Halley's (`f''' = 0`) and Newton's (`f'' = f''' = 0`) steps. Far from
+/// the root the higher-order terms can dominate and even reverse the step;
+/// so it falls back to Newton's step unless the denominator is safely
+/// positive (`≥ 3 f'³`) and the step has Newton's sign and at most twice
+/// its length.
+#[inline]
+pub(crate) fn householder_step(d: [f64; 4]) -> f64 {
+    let [f, f1, f2, f3] = d;
+    let newton = -f / f1;
+    let f1_2 = f1 * f1;
+    let num = 6.0 * f * f1_2 - 3.0 * f * f * f2;
+    let den = 6.0 * f1_2 * f1 - 6.0 * f * f1 * f2 + f * f * f3;
+    if den >= 3.0 * f1_2 * f1 {
+        let step = -num / den;
+        if step * newton > 0.0 && step.abs() <= 2.0 * newton.abs() {
+            return step;
+        }
+    }
+    newton
+}
+
+/// The shared gamma-closure core `Tr = exp(-σ t g(k t^e))`, see the module
+/// docs. `sigma_bar = T_sm(0) = σ q(x(0))`: `σ` for `e > 0`, `σ g(k)` for
+/// `e = 0`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct GammaCore {
+    pub sigma: f64,
+    pub k: f64,
+    pub e: f64,
+    pub sigma_bar: f64,
+    ln_sigma: f64,
+    ln_k: f64,
+}
+
+impl GammaCore {
+    pub fn new(sigma: f64, k: f64, e: f64) -> Self {
+        let sigma_bar = if e == 0.0 { sigma * g(k) } else { sigma };
+        GammaCore {
+            sigma,
+            k,
+            e,
+            sigma_bar,
+            ln_sigma: sigma.ln(),
+            ln_k: k.ln(),
+        }
+    }
+
+    /// `x(t) = k t^e`, with `x(0) = 0` for `e > 0` even when `k = inf`.
+    #[inline]
+    fn x(&self, t: f64) -> f64 {
+        if self.e == 0.0 {
+            self.k
+        } else if t == 0.0 {
+            0.0
+        } else if self.e == 1.0 {
+            self.k * t
+        } else {
+            self.k * t.powf(self.e)
+        }
+    }
+
+    /// `x (-q'(x)) = (1-e) x (-g') + e x / (1+x)²`, finite for all `x ≥ 0`.
+    #[inline]
+    fn x_neg_dq(&self, x: f64) -> f64 {
+        let b = if x.is_infinite() {
+            0.0
+        } else {
+            x / ((1.0 + x) * (1.0 + x))
+        };
+        (1.0 - self.e) * x_neg_dg(x) + self.e * b
+    }
+
+    #[inline]
+    pub fn ln_tr(&self, t: f64) -> f64 {
+        if t.is_infinite() && t > 0.0 {
+            return f64::NEG_INFINITY;
+        }
+        if !(t >= 0.0) {
+            return f64::NAN;
+        }
+        -self.sigma * t * g(self.x(t))
+    }
+
+    #[inline]
+    pub fn tr(&self, t: f64) -> f64 {
+        self.ln_tr(t).exp()
+    }
+
+    #[inline]
+    pub fn pdf(&self, t: f64) -> f64 {
+        if t.is_infinite() && t > 0.0 {
+            return 0.0;
+        }
+        let (tr, q) = self.tr_q(t);
+        self.sigma * tr * q
+    }
+
+    /// `(Tr(t), q(x(t)))` for finite `t ≥ 0`, sharing `x` and `g(x)` (one
+    /// `ln_1p` instead of two); bit-identical to `tr(t)` and `q(x(t))`.
+    #[inline]
+    fn tr_q(&self, t: f64) -> (f64, f64) {
+        let x = self.x(t);
+        let gx = g(x);
+        let tr = if t >= 0.0 {
+            (-self.sigma * t * gx).exp()
+        } else {
+            f64::NAN
+        };
+        (tr, (1.0 - self.e) * gx + self.e / (1.0 + x))
+    }
+
+    #[inline]
+    pub fn medium_surface(&self, t: f64) -> f64 {
+        if self.e == 0.0 {
+            // σ q / σ̄ = 1 exactly (and σ̄ may be 0 when k overflowed).
+            return self.tr(t);
+        }
+        // e > 0: σ̄ = σ.
+        if t.is_infinite() && t > 0.0 {
+            return 0.0;
+        }
+        let (tr, q) = self.tr_q(t);
+        tr * q
+    }
+
+    #[inline]
+    pub fn medium_medium(&self, t: f64) -> f64 {
+        if self.e == 0.0 {
+            return self.sigma_bar * self.tr(t);
+        }
+        if t.is_infinite() && t > 0.0 {
+            return 0.0;
+        }
+        if !(t >= 0.0) {
+            return f64::NAN;
+        }
+        if t == 0.0 {
+            // T_mm(0) = σ + e (-q'(0)) lim x/t with -q'(0) = (1+e)/2 and
+            // x/t = k t^(e-1): infinite for e < 1, σ + k for e = 1 (Davis:
+            // σ (α+1)/α).
+            return if self.e < 1.0 {
+                f64::INFINITY
+            } else {
+                self.sigma + self.k
+            };
+        }
+        let x = self.x(t);
+        let (tr, q) = self.tr_q(t);
+        if tr == 0.0 {
+            return 0.0;
+        }
+        tr * (self.sigma * q * q + self.e * self.x_neg_dq(x) / t)
+    }
+
+    /// Solve `-ln Tr(t) = y` for `t`.
+    #[inline]
+    pub fn sample_surface(&self, u: f64) -> f64 {
+        // y = -ln(1-u) ≥ 0, accurate for small u.
+        let y = -(-u).ln_1p();
+        if !(y > 0.0) {
+            return if u == 0.0 { 0.0 } else { f64::NAN };
+        }
+        if self.e == 0.0 || self.k == 0.0 {
+            // Exponential with σ̄ (σ g(k) for e = 0, σ for k = 0).
+            return y / self.sigma_bar;
+        }
+        if self.e == 1.0 {
+            // Davis: α ln(1 + σt/α) = y ⇒ t = expm1(y/α)/k, α = σ/k.
+            if self.k.is_infinite() {
+                return f64::INFINITY;
+            }
+            return (y * self.k / self.sigma).exp_m1() / self.k;
+        }
+        // Pink: φ(s) = ln σ + s + ln g(x) - ln y with s = ln t,
+        // x = k e^(e s), ln g = ln L - ln x, L = ln(1+x), dx/ds = e x.
+        // With a = x / ((1+x) L) = 1 / ((1+x) g) and b = x a'(x):
+        //   φ'   = (1-e) + e a ∈ [1-e, 1]     (increasing),
+        //   φ''  = e² b,  b = -a² (1 - g) ≤ 0  (concave),
+        //   φ''' = e³ x b'(x).
+        // g ≤ 1 gives φ(ln(y/σ)) ≤ 0, and φ' ≥ 1-e an upper bracket.
+        let ln_y = y.ln();
+        let e = self.e;
+        let c0 = self.ln_sigma - ln_y;
+        let phi = |s: f64| -> [f64; 4] {
+            let ln_x = self.ln_k + e * s;
+            let (ln_g, a, b, xdb) = if ln_x < -18.0 {
+                // x < 1.5e-8: ln g = -x/2, a = 1 - x/2, b = -x/2, x b' = -x/2,
+                // each to O(x²) < 1e-16.
+                let x = ln_x.exp();
+                (-0.5 * x, 1.0 - 0.5 * x, -0.5 * x, -0.5 * x)
+            } else if ln_x > 700.0 {
+                // 1 + x overflows soon: L = ln x to 1e-304, a = 1/L, g = 0,
+                // and x b' = O(1/L²) is negligible against φ'.
+                let a = 1.0 / ln_x;
+                (ln_x.ln() - ln_x, a, -a * a, 0.0)
+            } else {
+                let x = ln_x.exp();
+                let l = x.ln_1p();
+                // Two divisions only: a = x / ((1+x) L), b = x a'(x) =
+                // (x L - x²) / ((1+x)² L²) = a (L - x) / ((1+x) L), and
+                // x b'(x) = x (N' - b D') / D by the quotient rule with
+                // N = x L - x², D = (1+x)² L², so x/D = a / ((1+x) L).
+                let inv_1px = 1.0 / (1.0 + x);
+                let inv_l = 1.0 / l;
+                let a = x * inv_1px * inv_l;
+                let r = a * inv_1px * inv_l;
+                let b = r * (l - x);
+                let dn = l + x * inv_1px - 2.0 * x;
+                let dden = 2.0 * (1.0 + x) * l * (l + 1.0);
+                (l.ln() - ln_x, a, b, r * (dn - b * dden))
+            };
+            [c0 + s + ln_g, (1.0 - e) + e * a, e * e * b, e * e * e * xdb]
+        };
+        let s_lo = ln_y - self.ln_sigma;
+        let d_lo = phi(s_lo);
+        if d_lo[0] >= 0.0 {
+            // x is so small at s_lo that g(x) rounds to 1: s_lo is the root.
+            return s_lo.exp();
+        }
+        let s_hi = s_lo - d_lo[0] / (1.0 - e);
+        // First step from s_lo, reusing its evaluation (a Newton step stays
+        // below the root by concavity; the higher-order step may pass it by
+        // O(step⁴), and `min` keeps it inside the bracket).
+        let step = householder_step(d_lo);
+        if step.abs() <= SURFACE_TOL {
+            return (s_lo + step).exp();
+        }
+        let s1 = (s_lo + step).clamp(s_lo, s_hi);
+        solve_increasing(phi, s1, s_lo, s_hi, SURFACE_TOL).exp()
+    }
+
+    /// Solve `-ln T_ms(t) = y` for `t`.
+    #[inline]
+    pub fn sample_medium(&self, u: f64) -> f64 {
+        if self.e == 0.0 || self.k == 0.0 {
+            // T_ms = Tr for e = 0; for k = 0 the model is exponential.
+            return self.sample_surface(u);
+        }
+        let y = -(-u).ln_1p();
+        if !(y > 0.0) {
+            return if u == 0.0 { 0.0 } else { f64::NAN };
+        }
+        if self.e == 1.0 {
+            // Davis: T_ms = (1 + σt/α)^(-α-1) ⇒ t = expm1(y/(α+1))/k, and
+            // y/(α+1) = y/(σ/k + 1) (→ y as α → 0, so t → 0 for k = inf).
+            return (y / (self.sigma / self.k + 1.0)).exp_m1() / self.k;
+        }
+        // Pink: G(t) = -ln T_ms = σ t g(x) - ln q(x) (σ̄ = σ), increasing
+        // since T_mm > 0; φ(s) = ln G(e^s) - ln y with s = ln t, and with
+        // r(x) = x (-q'(x)) ≥ 0, ρ(x) = x (-g'(x)):
+        //   G'  = dG/ds = τ q + e r / q,
+        //   G'' = τ (q - e r) + e² (x r' q + r²) / q²,
+        //   x r' = (1-e) (x/(1+x)² - ρ) + e x (1-x)/(1+x)³,
+        //   φ' = G'/G,  φ'' = G''/G - φ'²  (Halley's step).
+        let ln_y = y.ln();
+        let e = self.e;
+        let phi = |s: f64| -> [f64; 4] {
+            let t = s.exp();
+            let x = (self.ln_k + e * s).exp();
+            let tau = self.sigma * t;
+            // g, ρ = x(-g') = g - 1/(1+x) and g - 1 once each (series below
+            // SERIES_X, see `g_minus_1` and `x_neg_dg`).
+            let gx = g(x);
+            let inv = if x.is_infinite() {
+                0.0
+            } else {
+                1.0 / (1.0 + x)
+            };
+            let (rho, gm1) = if x < SERIES_X {
+                (x_neg_dg(x), g_minus_1(x))
+            } else {
+                (gx - inv, gx - 1.0)
+            };
+            let q = (1.0 - e) * gx + e * inv;
+            // ln q: through q - 1 near q = 1 (small x, no cancellation), and
+            // directly once q < 1/2 (large x, where q - 1 would lose q).
+            let ln_q = if q > 0.5 {
+                ((1.0 - e) * gm1 - e * x * inv).ln_1p()
+            } else {
+                q.ln()
+            };
+            let big_g = tau * gx - ln_q;
+            let x_inv2 = x * inv * inv;
+            let r = (1.0 - e) * rho + e * x_inv2;
+            let g1 = tau * q + e * r / q;
+            let x_dr = (1.0 - e) * (x_inv2 - rho) + e * x_inv2 * (1.0 - x) * inv;
+            let g2 = tau * (q - e * r) + e * e * (x_dr * q + r * r) / (q * q);
+            let d1 = g1 / big_g;
+            [big_g.ln() - ln_y, d1, g2 / big_g - d1 * d1, 0.0]
+        };
+        // Start from the smaller of the two small-t asymptotes of G,
+        // σ t and (1+e) k t^e / 2 (the t^e term dominates near 0).
+        let s_a = ln_y - self.ln_sigma;
+        let s_b = (ln_y - (0.5 * (1.0 + e)).ln() - self.ln_k) / e;
+        let s0 = s_a.min(s_b);
+        solve_increasing(phi, s0, f64::NEG_INFINITY, f64::INFINITY, MEDIUM_TOL).exp()
+    }
+}
+
+/// A transmittance model of any kind, dispatched by `match` (no `dyn` in the
+/// renderer's inner loop). `Copy`, allocation-free; construct it from a
+/// validated model with `Model::from(...)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Model {
+    Exponential(Exponential),
+    Fgf(Fgf),
+    Davis(Davis),
+    DavisWeinstein(DavisWeinstein),
+}
+
+macro_rules! dispatch {
+    ($self:ident, $m:ident => $e:expr) => {
+        match $self {
+            Model::Exponential($m) => $e,
+            Model::Fgf($m) => $e,
+            Model::Davis($m) => $e,
+            Model::DavisWeinstein($m) => $e,
+        }
+    };
+}
+
+impl Model {
+    /// `Tr(t) = T_ss(t)`.
+    #[inline]
+    pub fn tr(&self, t: f64) -> f64 {
+        dispatch!(self, m => m.tr(t))
+    }
+    /// `-dTr/dt = T_sm(t)`.
+    #[inline]
+    pub fn pdf(&self, t: f64) -> f64 {
+        dispatch!(self, m => m.pdf(t))
+    }
+    #[inline]
+    pub fn surface_surface(&self, t: f64) -> f64 {
+        dispatch!(self, m => m.surface_surface(t))
+    }
+    #[inline]
+    pub fn surface_medium(&self, t: f64) -> f64 {
+        dispatch!(self, m => m.surface_medium(t))
+    }
+    #[inline]
+    pub fn medium_surface(&self, t: f64) -> f64 {
+        dispatch!(self, m => m.medium_surface(t))
+    }
+    #[inline]
+    pub fn medium_medium(&self, t: f64) -> f64 {
+        dispatch!(self, m => m.medium_medium(t))
+    }
+    #[inline]
+    pub fn sigma_bar(&self) -> f64 {
+        dispatch!(self, m => m.sigma_bar())
+    }
+    /// Mean extinction `σ_m` the model was built with.
+    #[inline]
+    pub fn sigma_t(&self) -> f64 {
+        dispatch!(self, m => m.sigma_t())
+    }
+    #[inline]
+    pub fn sample_surface(&self, u: f64) -> f64 {
+        dispatch!(self, m => m.sample_surface(u))
+    }
+    #[inline]
+    pub fn sample_medium(&self, u: f64) -> f64 {
+        dispatch!(self, m => m.sample_medium(u))
+    }
+}
+
+impl From<Exponential> for Model {
+    fn from(m: Exponential) -> Self {
+        Model::Exponential(m)
+    }
+}
+impl From<Fgf> for Model {
+    fn from(m: Fgf) -> Self {
+        Model::Fgf(m)
+    }
+}
+impl From<Davis> for Model {
+    fn from(m: Davis) -> Self {
+        Model::Davis(m)
+    }
+}
+impl From<DavisWeinstein> for Model {
+    fn from(m: DavisWeinstein) -> Self {
+        Model::DavisWeinstein(m)
+    }
+}
+
+/// Forward the shared methods of a model struct with a `core: GammaCore`
+/// field.
+macro_rules! forward_core {
+    () => {
+        /// `Tr(t) = T_ss(t)`, dimensionless.
+        #[inline]
+        pub fn tr(&self, t: f64) -> f64 {
+            self.core.tr(t)
+        }
+        /// `p(t) = -dTr/dt = T_sm(t)` (1/length): the free-flight pdf from a
+        /// surface; `∫p = 1`.
+        #[inline]
+        pub fn pdf(&self, t: f64) -> f64 {
+            self.core.pdf(t)
+        }
+        /// `T_ss(t) = Tr(t)`.
+        #[inline]
+        pub fn surface_surface(&self, t: f64) -> f64 {
+            self.core.tr(t)
+        }
+        /// `T_sm(t) = -dTr/dt`.
+        #[inline]
+        pub fn surface_medium(&self, t: f64) -> f64 {
+            self.core.pdf(t)
+        }
+        /// `T_ms(t) = T_sm(t) / σ̄`, dimensionless.
+        #[inline]
+        pub fn medium_surface(&self, t: f64) -> f64 {
+            self.core.medium_surface(t)
+        }
+        /// `T_mm(t) = -dT_ms/dt` (1/length): the free-flight pdf from a
+        /// medium vertex.
+        #[inline]
+        pub fn medium_medium(&self, t: f64) -> f64 {
+            self.core.medium_medium(t)
+        }
+        /// `σ̄ = T_sm(0)` (1/length).
+        #[inline]
+        pub fn sigma_bar(&self) -> f64 {
+            self.core.sigma_bar
+        }
+        /// Mean extinction `σ_m` (1/length).
+        #[inline]
+        pub fn sigma_t(&self) -> f64 {
+            self.core.sigma
+        }
+        /// Free-flight distance from a surface: solves `1 - T_ss(t) = u`.
+        #[inline]
+        pub fn sample_surface(&self, u: f64) -> f64 {
+            self.core.sample_surface(u)
+        }
+        /// Free-flight distance from a medium vertex: solves `1 - T_ms(t) = u`.
+        #[inline]
+        pub fn sample_medium(&self, u: f64) -> f64 {
+            self.core.sample_medium(u)
+        }
+    };
+}
+pub(crate) use forward_core;
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn series_match_direct_forms_at_the_switch() {
+        let x = SERIES_X * (1.0 - 1e-12);
+        let direct_gm1 = x.ln_1p() / x - 1.0;
+        assert!(((g_minus_1(x) - direct_gm1) / direct_gm1).abs() < 1e-13);
+        let direct = x.ln_1p() / x - 1.0 / (1.0 + x);
+        assert!(((x_neg_dg(x) - direct) / direct).abs() < 1e-13);
+        // Small x: leading terms.
+        let x = 1e-8;
+        assert!(((g_minus_1(x) + x / 2.0) / (x / 2.0)).abs() < 1e-7);
+        assert!(((x_neg_dg(x) - x / 2.0) / (x / 2.0)).abs() < 1e-7);
+    }
+
+    #[test]
+    fn solver_finds_root_of_a_line_and_handles_overflow() {
+        let s = solve_increasing(
+            |s| [s - 3.0, 1.0, 0.0, 0.0],
+            0.0,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            1e-9,
+        );
+        assert!((s - 3.0).abs() < 1e-12);
+        // Root beyond t's range: +inf.
+        let s = solve_increasing(
+            |s| [s - 1e6, 1e-9, 0.0, 0.0],
+            0.0,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            1e-9,
+        );
+        assert_eq!(s, f64::INFINITY);
+        // A flat derivative (Newton useless) still terminates by bisection.
+        let s = solve_increasing(
+            |s| [(s - 1.0).powi(3), 0.0, 0.0, 0.0],
+            0.0,
+            -10.0,
+            10.0,
+            1e-9,
+        );
+        assert!((s - 1.0).abs() < 1e-3);
+    }
+}

@@ -1,0 +1,478 @@
+//! The compiled scene ([`World`]) and the volumetric path tracer.
+//!
+//! `volpath` (and `path`, the same code on scenes without media) follows
+//! Mitsuba 3's semantics, so both renderers converge to the same image:
+//!
+//! * `max_depth` counts scattering events in media and interactions with
+//!   non-null surfaces; crossing a `null` boundary does not count. A path
+//!   with `d` such events contributes only if `d < max_depth`, so
+//!   `max_depth = 1` shows emitters seen directly (also through media and
+//!   null boundaries), `max_depth = 2` adds single scattering and direct
+//!   lighting of surfaces; `-1` is unbounded.
+//! * Next-event estimation at every scattering event and at every
+//!   non-delta surface, combined with phase/BSDF sampling by multiple
+//!   importance sampling (power heuristic). Emitters hit by a path after a
+//!   delta surface (or directly from the camera) count fully.
+//! * Shadow rays pass through `null` boundaries and media (transmittance
+//!   estimates); any other surface blocks them.
+//! * Russian roulette from depth `rr_depth` on: survival probability
+//!   `min(max(throughput)·η², 0.95)`.
+//! * RGB throughput; media sample free flights with spectral MIS (see
+//!   [`crate::medium`]).
+
+use crate::bsdf::Bsdf;
+use crate::camera::Camera;
+use crate::emitter::Emitter;
+use crate::geometry::{offset_point, shadow_epsilon, Geometry, Hit, Ray};
+use crate::math::{max_comp, mis_power, Frame, Sampler, Spectrum, UNIFORM_SPHERE_PDF};
+use crate::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
+use crate::render::RenderError;
+use crate::scene::desc::{IntegratorKind, SceneDesc};
+use glam::Vec3;
+
+/// Per-shape data the integrator needs at a hit.
+#[derive(Debug, Clone, Copy)]
+pub struct ShapeInfo {
+    pub bsdf: u32,
+    /// Index into `World::emitters` of its area emitter.
+    pub emitter: Option<u32>,
+    pub interior: Option<u32>,
+    pub exterior: Option<u32>,
+}
+
+impl ShapeInfo {
+    /// The medium a ray leaving the surface along `d` enters, if the shape
+    /// is a medium boundary (Mitsuba: exterior on the normal side).
+    #[inline]
+    fn target_medium(&self, h: &Hit, d: Vec3, current: Option<u32>) -> Option<u32> {
+        if self.interior.is_none() && self.exterior.is_none() {
+            current
+        } else if d.dot(h.n) > 0.0 {
+            self.exterior
+        } else {
+            self.interior
+        }
+    }
+}
+
+/// The scene compiled for rendering.
+pub struct World {
+    pub geom: Geometry,
+    pub shapes: Vec<ShapeInfo>,
+    pub bsdfs: Vec<Bsdf>,
+    pub emitters: Vec<Emitter>,
+    /// Index of the `constant` environment emitter, if any.
+    pub env: Option<u32>,
+    pub media: Vec<Medium>,
+    pub camera: Camera,
+    pub camera_medium: Option<u32>,
+    pub max_depth: u32,
+    pub rr_depth: u32,
+    pub hide_emitters: bool,
+}
+
+impl World {
+    pub fn build(desc: &SceneDesc) -> Result<World, RenderError> {
+        if desc.integrator.kind == IntegratorKind::Path
+            && (!desc.media.is_empty() || desc.sensor.medium.is_some())
+        {
+            return Err(RenderError::InvalidScene(
+                "the 'path' integrator does not handle media; use 'volpath'".into(),
+            ));
+        }
+        let geom = Geometry::build(&desc.shapes)?;
+        let bsdfs: Vec<Bsdf> = desc.bsdfs.iter().map(Bsdf::from_desc).collect();
+        let media = desc
+            .media
+            .iter()
+            .enumerate()
+            .map(|(i, m)| Medium::from_desc(m, i))
+            .collect::<Result<Vec<_>, _>>()?;
+        let mut emitters = Vec::new();
+        let mut shapes = Vec::new();
+        let check_medium = |m: Option<usize>, what: &str| -> Result<Option<u32>, RenderError> {
+            match m {
+                Some(i) if i >= media.len() => Err(RenderError::InvalidScene(format!(
+                    "{what} refers to medium {i}, but there are {}",
+                    media.len()
+                ))),
+                Some(i) => Ok(Some(i as u32)),
+                None => Ok(None),
+            }
+        };
+        for (i, s) in desc.shapes.iter().enumerate() {
+            if s.bsdf >= bsdfs.len() {
+                return Err(RenderError::InvalidScene(format!(
+                    "{}: BSDF index {} out of range",
+                    s.name, s.bsdf
+                )));
+            }
+            let emitter = match &s.emitter {
+                Some(e) => {
+                    if geom.areas[i] <= 0.0 {
+                        return Err(RenderError::InvalidScene(format!(
+                            "{}: an area emitter on a shape of zero area",
+                            s.name
+                        )));
+                    }
+                    emitters.push(Emitter::from_desc(e, Some(i as u32)));
+                    Some((emitters.len() - 1) as u32)
+                }
+                None => None,
+            };
+            shapes.push(ShapeInfo {
+                bsdf: s.bsdf as u32,
+                emitter,
+                interior: check_medium(s.interior, &s.name)?,
+                exterior: check_medium(s.exterior, &s.name)?,
+            });
+        }
+        let mut env = None;
+        for e in &desc.emitters {
+            if let crate::scene::desc::EmitterDesc::Area { .. } = e {
+                return Err(RenderError::InvalidScene(
+                    "an area emitter must be attached to a shape".into(),
+                ));
+            }
+            let em = Emitter::from_desc(e, None);
+            if let Emitter::Constant { .. } = em {
+                if env.is_some() {
+                    return Err(RenderError::InvalidScene(
+                        "more than one constant environment emitter".into(),
+                    ));
+                }
+                env = Some(emitters.len() as u32);
+            }
+            emitters.push(em);
+        }
+        let camera = Camera::new(&desc.sensor)?;
+        let camera_medium = check_medium(desc.sensor.medium, "the sensor")?;
+        Ok(World {
+            geom,
+            shapes,
+            bsdfs,
+            emitters,
+            env,
+            media,
+            camera,
+            camera_medium,
+            // Mitsuba stores max_depth as unsigned: -1 means unbounded.
+            max_depth: if desc.integrator.max_depth < 0 {
+                u32::MAX
+            } else {
+                desc.integrator.max_depth as u32
+            },
+            rr_depth: desc.integrator.rr_depth,
+            hide_emitters: desc.integrator.hide_emitters,
+        })
+    }
+
+    /// Probability of picking one given emitter for next-event estimation.
+    #[inline]
+    fn select_pdf(&self) -> f32 {
+        1.0 / self.emitters.len() as f32
+    }
+
+    /// Transmittance from `p` (offset off the surface with normal `n`, if on
+    /// one) toward direction `wi` over `dist`, through null boundaries and
+    /// media; zero if any other surface blocks it.
+    fn shadow(
+        &self,
+        p: Vec3,
+        n: Option<Vec3>,
+        wi: Vec3,
+        dist: f32,
+        mut medium: Option<u32>,
+        mut start: SegmentStart,
+        s: &mut Sampler,
+    ) -> Spectrum {
+        let target = if dist.is_finite() {
+            Some(p + wi * dist)
+        } else {
+            None
+        };
+        let mut o = match n {
+            Some(n) => offset_point(p, n, wi),
+            None => p,
+        };
+        let mut tr = Spectrum::ONE;
+        loop {
+            let t_end = match target {
+                Some(q) => (q - o).length() - shadow_epsilon(q),
+                None => f32::INFINITY,
+            };
+            if !(t_end > 0.0) {
+                return tr;
+            }
+            let ray = Ray { o, d: wi };
+            let hit = self.geom.intersect(&ray, t_end);
+            let t_seg = hit.map_or(t_end, |h| h.t);
+            if let Some(m) = medium {
+                tr *= self.media[m as usize].transmittance(
+                    &ray,
+                    t_seg,
+                    start,
+                    SegmentEnd::Surface,
+                    s,
+                );
+                if tr == Spectrum::ZERO {
+                    return tr;
+                }
+            }
+            let Some(h) = hit else { return tr };
+            let info = &self.shapes[h.shape as usize];
+            if !self.bsdfs[info.bsdf as usize].is_null() {
+                return Spectrum::ZERO;
+            }
+            medium = info.target_medium(&h, wi, medium);
+            o = offset_point(h.p, h.n, wi);
+            start = SegmentStart::Surface;
+        }
+    }
+
+    /// Pick an emitter and sample it from `p`; returns the direction, the
+    /// unoccluded-and-transmitted `Le/pdf` and the light pdf for MIS.
+    #[inline]
+    fn sample_light(
+        &self,
+        p: Vec3,
+        n: Option<Vec3>,
+        medium: Option<u32>,
+        start: SegmentStart,
+        s: &mut Sampler,
+    ) -> Option<(Vec3, Spectrum, f32, bool)> {
+        if self.emitters.is_empty() {
+            return None;
+        }
+        let n_em = self.emitters.len();
+        let k = ((s.next_1d() * n_em as f32) as usize).min(n_em - 1);
+        let u_sel = s.next_1d();
+        let u = s.next_2d();
+        let ls = self.emitters[k].sample(&self.geom, p, u_sel, u)?;
+        let pdf = ls.pdf * self.select_pdf();
+        let tr = self.shadow(p, n, ls.wi, ls.dist, medium, start, s);
+        if tr == Spectrum::ZERO {
+            return None;
+        }
+        Some((ls.wi, ls.value * tr / pdf, pdf, ls.delta))
+    }
+
+    /// Radiance arriving at the camera along `ray` (one sample).
+    pub fn li(&self, mut ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
+        let mut l = Spectrum::ZERO;
+        let mut thr = Spectrum::ONE;
+        if self.max_depth == 0 {
+            return l;
+        }
+        let mut medium = self.camera_medium;
+        let mut depth = 0u32;
+        // The path so far is the camera followed by delta interactions only:
+        // emission found by continuation then counts without MIS.
+        let mut specular = true;
+        let mut prev_pdf = 1.0f32;
+        let mut prev_p = ray.o;
+        let mut eta = 1.0f32;
+        let mut start = SegmentStart::Surface;
+        let mut t_max = t_max_primary;
+        // Path-level spectral MIS (see `Medium::sample_distance_spectral`):
+        // free flights use the hero channel's pdf; `r_u` holds each channel's
+        // path pdf over the hero's, and a contribution is `thr·L / mean(r_u)`.
+        let hero = ((s.next_1d() * 3.0) as usize).min(2);
+        let mut r_u = Spectrum::ONE;
+        let mut inv_mis = 1.0f32;
+        loop {
+            let hit = self.geom.intersect(&ray, t_max);
+            let t_surf = hit.map_or(t_max, |h| h.t);
+            if let Some(m) = medium {
+                let med = &self.media[m as usize];
+                let (ds, r) = med.sample_distance_spectral(&ray, t_surf, start, hero, s);
+                thr *= ds.weight;
+                r_u *= r;
+                // Only ratios matter: rescale thr and r_u together so that
+                // neither under- nor overflows on long paths.
+                let rm = max_comp(r_u);
+                if !(1e-4..=1e4).contains(&rm) && rm > 0.0 {
+                    r_u /= rm;
+                    thr /= rm;
+                }
+                inv_mis = 1.0 / crate::math::mean(r_u);
+                if ds.event == DistanceEvent::Scatter {
+                    depth += 1;
+                    if depth >= self.max_depth || thr == Spectrum::ZERO {
+                        break;
+                    }
+                    let p = ray.at(ds.t);
+                    let phase = med.phase();
+                    // Next-event estimation from the medium vertex.
+                    if let Some((wi, le, light_pdf, delta)) =
+                        self.sample_light(p, None, medium, SegmentStart::Medium, s)
+                    {
+                        let f = phase.eval(ray.d, wi);
+                        let w = if delta { 1.0 } else { mis_power(light_pdf, f) };
+                        l += thr * le * (f * w * inv_mis);
+                    }
+                    let (wo, pdf) = phase.sample(ray.d, s.next_2d());
+                    prev_pdf = pdf;
+                    prev_p = p;
+                    specular = false;
+                    ray = Ray { o: p, d: wo };
+                    start = SegmentStart::Medium;
+                    t_max = f32::INFINITY;
+                    if !self.roulette(depth, &mut thr, inv_mis, eta, s) {
+                        break;
+                    }
+                    continue;
+                }
+                if thr == Spectrum::ZERO {
+                    break;
+                }
+            }
+            t_max = f32::INFINITY;
+            let Some(h) = hit else {
+                // Escaped: the environment, if any.
+                if let Some(e) = self.env {
+                    if !(depth == 0 && self.hide_emitters) {
+                        if let Emitter::Constant { radiance } = self.emitters[e as usize] {
+                            let w = if specular {
+                                1.0
+                            } else {
+                                mis_power(prev_pdf, UNIFORM_SPHERE_PDF * self.select_pdf())
+                            };
+                            l += thr * radiance * (w * inv_mis);
+                        }
+                    }
+                }
+                break;
+            };
+            let info = self.shapes[h.shape as usize];
+            // Emission of an area light seen from its front side.
+            if let Some(e) = info.emitter {
+                if !(depth == 0 && self.hide_emitters) && h.n.dot(ray.d) < 0.0 {
+                    if let Emitter::Area { radiance, shape } = self.emitters[e as usize] {
+                        let w = if specular {
+                            1.0
+                        } else {
+                            let d2 = (h.p - prev_p).length_squared();
+                            let cos_l = -h.n.dot(ray.d);
+                            let light_pdf =
+                                self.select_pdf() * d2 / (cos_l * self.geom.areas[shape as usize]);
+                            mis_power(prev_pdf, light_pdf)
+                        };
+                        l += thr * radiance * (w * inv_mis);
+                    }
+                }
+            }
+            let bsdf = self.bsdfs[info.bsdf as usize];
+            if bsdf.is_null() {
+                // Index-matched boundary: continue straight on; a new segment starts.
+                medium = info.target_medium(&h, ray.d, medium);
+                ray = Ray {
+                    o: offset_point(h.p, h.n, ray.d),
+                    d: ray.d,
+                };
+                start = SegmentStart::Surface;
+                continue;
+            }
+            // This interaction would be event number depth + 1: nothing it
+            // leads to can contribute unless depth + 1 < max_depth.
+            if depth + 1 >= self.max_depth {
+                break;
+            }
+            let frame = Frame::from_normal(h.ns);
+            let wi_local = frame.to_local(-ray.d);
+            if bsdf.is_smooth() {
+                // Next-event estimation from the surface.
+                if let Some((le, f, w)) =
+                    self.sample_light_surface(&h, &info, &bsdf, &frame, wi_local, medium, s)
+                {
+                    l += thr * le * f * (w * inv_mis);
+                }
+            }
+            let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
+                break;
+            };
+            let wo = frame.to_world(bs.wo);
+            thr *= bs.weight;
+            eta *= bs.eta;
+            depth += 1;
+            specular = bs.delta;
+            prev_pdf = bs.pdf;
+            prev_p = h.p;
+            medium = info.target_medium(&h, wo, medium);
+            ray = Ray {
+                o: offset_point(h.p, h.n, wo),
+                d: wo,
+            };
+            start = SegmentStart::Surface;
+            if thr == Spectrum::ZERO || !self.roulette(depth, &mut thr, inv_mis, eta, s) {
+                break;
+            }
+        }
+        l
+    }
+
+    /// Light sampling from a surface point: like [`Self::sample_light`], but
+    /// the shadow ray starts in the medium on the side it leaves toward, and
+    /// it is only traced if the BSDF is non-zero for the sampled direction.
+    /// Returns `(Le·Tr/pdf, f·|cos|, MIS weight)`.
+    #[inline]
+    #[allow(clippy::too_many_arguments)]
+    fn sample_light_surface(
+        &self,
+        h: &Hit,
+        info: &ShapeInfo,
+        bsdf: &Bsdf,
+        frame: &Frame,
+        wi_local: Vec3,
+        medium: Option<u32>,
+        s: &mut Sampler,
+    ) -> Option<(Spectrum, Spectrum, f32)> {
+        if self.emitters.is_empty() {
+            return None;
+        }
+        let n_em = self.emitters.len();
+        let k = ((s.next_1d() * n_em as f32) as usize).min(n_em - 1);
+        let u_sel = s.next_1d();
+        let u = s.next_2d();
+        let ls = self.emitters[k].sample(&self.geom, h.p, u_sel, u)?;
+        let (f, bsdf_pdf) = bsdf.eval_pdf(wi_local, frame.to_local(ls.wi));
+        if f == Spectrum::ZERO {
+            return None;
+        }
+        let pdf = ls.pdf * self.select_pdf();
+        let m = info.target_medium(h, ls.wi, medium);
+        let tr = self.shadow(h.p, Some(h.n), ls.wi, ls.dist, m, SegmentStart::Surface, s);
+        if tr == Spectrum::ZERO {
+            return None;
+        }
+        let w = if ls.delta {
+            1.0
+        } else {
+            mis_power(pdf, bsdf_pdf)
+        };
+        Some((ls.value * tr / pdf, f, w))
+    }
+
+    /// `thr·inv_mis` is the path weight, the same whichever channel is the
+    /// hero, so the survival probability does not depend on the hero.
+    fn roulette(
+        &self,
+        depth: u32,
+        thr: &mut Spectrum,
+        inv_mis: f32,
+        eta: f32,
+        s: &mut Sampler,
+    ) -> bool {
+        if depth < self.rr_depth {
+            return true;
+        }
+        // η² undoes the radiance scaling at refractions so that a path
+        // inside glass is not killed for a weight it will regain on exit.
+        let q = (max_comp(*thr) * inv_mis * eta * eta).min(0.95);
+        if !(q > 0.0) || s.next_1d() >= q {
+            return false;
+        }
+        *thr /= q;
+        true
+    }
+}

@@ -1,0 +1,581 @@
+//! Heterogeneous (grid) medium: `sigma_t(x) = scale · grid(x)` from a
+//! Mitsuba `gridvolume`, albedo constant or from its own grid.
+//!
+//! * The grid spans the unit cube `[0,1]³` of volume space (or the file's
+//!   bounding box with `use_grid_bbox`), mapped to the world by the volume's
+//!   `to_world`. Like Mitsuba, the medium is empty outside that box.
+//! * Lookups follow Mitsuba 3 (checked against 3.9.1): voxel `i` is centred
+//!   at `(i + 0.5)/res`; `trilinear` interpolates between centres and clamps
+//!   at the border; `nearest` takes the voxel containing the point.
+//! * Free flights use delta tracking and shadow rays ratio tracking against a
+//!   piecewise-constant majorant: a coarse grid of (at most) 16³ super-voxels,
+//!   each holding the maximum of every voxel value a lookup inside it can
+//!   reach, traversed with a 3D-DDA (Amanatides–Woo). Sparse or high-contrast
+//!   grids thus do not pay for the global maximum everywhere.
+//! * A chromatic `sigma_t` (3 channels) uses a scalar majorant (the max over
+//!   channels) and weighted tracking: a tentative collision is real with
+//!   probability `P = mean(σ_t)/μ` and is weighted by `σ_s/(μ P)`, a null
+//!   collision by `(μ - σ_t)/(μ (1 - P))`; for a grey medium these are the
+//!   albedo and 1 (classical delta tracking).
+//!
+//! ```xml
+//! <medium type="heterogeneous" name="interior">
+//!     <volume type="gridvolume" name="sigma_t">
+//!         <string name="filename" value="density64.vol"/>
+//!     </volume>
+//!     <float name="scale" value="4"/>
+//!     <rgb name="albedo" value="0.8"/>
+//! </medium>
+//! ```
+
+use super::{DistanceEvent, DistanceSample};
+use crate::geometry::Ray;
+use crate::math::{mean, Sampler, Spectrum};
+use crate::phase::Phase;
+use crate::render::RenderError;
+use crate::scene::desc::{GridFilter, GridVolumeDesc, VolumeDesc};
+use glam::{Affine3A, Vec3};
+use std::ops::ControlFlow;
+
+/// A 1- or 3-channel grid sampled in unit-cube coordinates.
+#[derive(Debug, Clone)]
+pub struct GridTex {
+    res: [usize; 3],
+    channels: usize,
+    data: Vec<f32>,
+    filter: GridFilter,
+    /// World to unit-cube coordinates.
+    to_unit: Affine3A,
+}
+
+impl GridTex {
+    pub fn new(d: &GridVolumeDesc, what: &str) -> Result<GridTex, RenderError> {
+        let g = &d.grid;
+        if !(g.channels == 1 || g.channels == 3) {
+            return Err(RenderError::Unsupported(format!(
+                "{what}: a gridvolume with {} channels; 1 or 3 are supported",
+                g.channels
+            )));
+        }
+        if g.shape.iter().any(|&n| n == 0)
+            || g.data.len() != g.shape.iter().product::<usize>() * g.channels
+        {
+            return Err(RenderError::InvalidScene(format!(
+                "{what}: grid data does not match its {:?} shape",
+                g.shape
+            )));
+        }
+        if let Some(v) = g.data.iter().find(|v| !v.is_finite() || **v < 0.0) {
+            return Err(RenderError::InvalidScene(format!(
+                "{what}: grid holds {v}; values must be finite and >= 0"
+            )));
+        }
+        if !d.wrap_clamp {
+            return Err(RenderError::Unsupported(format!(
+                "{what}: only wrap_mode=clamp is supported"
+            )));
+        }
+        let m = glam::Mat4::from(Affine3A::from_mat4(d.to_world));
+        if m.determinant().abs() < 1e-30 || !m.is_finite() {
+            return Err(RenderError::InvalidScene(format!(
+                "{what}: the volume's to_world is singular"
+            )));
+        }
+        let mut to_unit = Affine3A::from_mat4(d.to_world).inverse();
+        if d.use_grid_bbox {
+            let b = g.bbox;
+            let lo = Vec3::new(b[0], b[1], b[2]);
+            let ext = Vec3::new(b[3], b[4], b[5]) - lo;
+            if !(ext.min_element() > 0.0) {
+                return Err(RenderError::InvalidScene(format!(
+                    "{what}: use_grid_bbox with an empty bounding box {b:?}"
+                )));
+            }
+            to_unit = Affine3A::from_scale(ext.recip()) * Affine3A::from_translation(-lo) * to_unit;
+        }
+        Ok(GridTex {
+            res: g.shape,
+            channels: g.channels,
+            data: g.data.clone(),
+            filter: d.filter,
+            to_unit,
+        })
+    }
+
+    #[inline]
+    fn voxel(&self, x: usize, y: usize, z: usize) -> Spectrum {
+        let i = ((z * self.res[1] + y) * self.res[0] + x) * self.channels;
+        if self.channels == 1 {
+            Spectrum::splat(self.data[i])
+        } else {
+            Spectrum::new(self.data[i], self.data[i + 1], self.data[i + 2])
+        }
+    }
+
+    /// Value at unit-cube coordinates `u`.
+    #[inline]
+    pub fn eval_unit(&self, u: Vec3) -> Spectrum {
+        match self.filter {
+            GridFilter::Nearest => {
+                let idx = |k: usize| {
+                    ((u[k] * self.res[k] as f32).floor().max(0.0) as usize).min(self.res[k] - 1)
+                };
+                self.voxel(idx(0), idx(1), idx(2))
+            }
+            GridFilter::Trilinear => {
+                let mut i0 = [0usize; 3];
+                let mut i1 = [0usize; 3];
+                let mut f = [0f32; 3];
+                for k in 0..3 {
+                    // Voxel centres at (i + 0.5)/res; clamp-to-edge outside.
+                    let x = u[k] * self.res[k] as f32 - 0.5;
+                    let fl = x.floor();
+                    let i = fl as i64;
+                    let hi = self.res[k] as i64 - 1;
+                    i0[k] = i.clamp(0, hi) as usize;
+                    i1[k] = (i + 1).clamp(0, hi) as usize;
+                    f[k] = x - fl;
+                }
+                let lerp = |a: Spectrum, b: Spectrum, t: f32| a + (b - a) * t;
+                let c00 = lerp(
+                    self.voxel(i0[0], i0[1], i0[2]),
+                    self.voxel(i1[0], i0[1], i0[2]),
+                    f[0],
+                );
+                let c10 = lerp(
+                    self.voxel(i0[0], i1[1], i0[2]),
+                    self.voxel(i1[0], i1[1], i0[2]),
+                    f[0],
+                );
+                let c01 = lerp(
+                    self.voxel(i0[0], i0[1], i1[2]),
+                    self.voxel(i1[0], i0[1], i1[2]),
+                    f[0],
+                );
+                let c11 = lerp(
+                    self.voxel(i0[0], i1[1], i1[2]),
+                    self.voxel(i1[0], i1[1], i1[2]),
+                    f[0],
+                );
+                lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
+            }
+        }
+    }
+
+    /// Value of a 1-channel grid at unit-cube coordinates `u` (the scalar
+    /// fast path of [`Self::eval_unit`]).
+    #[inline]
+    pub fn eval_unit_scalar(&self, u: Vec3) -> f32 {
+        debug_assert_eq!(self.channels, 1);
+        let d = &self.data;
+        let (rx, ry) = (self.res[0], self.res[1]);
+        match self.filter {
+            GridFilter::Nearest => {
+                let idx = |k: usize| {
+                    ((u[k] * self.res[k] as f32).floor().max(0.0) as usize).min(self.res[k] - 1)
+                };
+                d[(idx(2) * ry + idx(1)) * rx + idx(0)]
+            }
+            GridFilter::Trilinear => {
+                let mut i0 = [0usize; 3];
+                let mut i1 = [0usize; 3];
+                let mut f = [0f32; 3];
+                for k in 0..3 {
+                    let x = u[k] * self.res[k] as f32 - 0.5;
+                    let fl = x.floor();
+                    let i = fl as i64;
+                    let hi = self.res[k] as i64 - 1;
+                    i0[k] = i.clamp(0, hi) as usize;
+                    i1[k] = (i + 1).clamp(0, hi) as usize;
+                    f[k] = x - fl;
+                }
+                let at = |x: usize, y: usize, z: usize| d[(z * ry + y) * rx + x];
+                let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
+                let c00 = lerp(at(i0[0], i0[1], i0[2]), at(i1[0], i0[1], i0[2]), f[0]);
+                let c10 = lerp(at(i0[0], i1[1], i0[2]), at(i1[0], i1[1], i0[2]), f[0]);
+                let c01 = lerp(at(i0[0], i0[1], i1[2]), at(i1[0], i0[1], i1[2]), f[0]);
+                let c11 = lerp(at(i0[0], i1[1], i1[2]), at(i1[0], i1[1], i1[2]), f[0]);
+                lerp(lerp(c00, c10, f[1]), lerp(c01, c11, f[1]), f[2])
+            }
+        }
+    }
+
+    /// Value at world point `p`.
+    #[inline]
+    pub fn eval_world(&self, p: Vec3) -> Spectrum {
+        self.eval_unit(self.to_unit.transform_point3(p))
+    }
+}
+
+/// Albedo of a grid medium.
+#[derive(Debug, Clone)]
+pub enum Albedo {
+    Constant(Spectrum),
+    Grid(GridTex),
+}
+
+/// Super-voxels per axis of the majorant grid (fewer if the grid is coarser).
+const MAJORANT_RES: usize = 16;
+
+#[derive(Debug, Clone)]
+pub struct GridMedium {
+    sigma_t: GridTex,
+    albedo: Albedo,
+    scale: f32,
+    pub phase: Phase,
+    /// Majorant super-voxel resolution and values (already times `scale`).
+    maj_res: [usize; 3],
+    maj: Vec<f32>,
+}
+
+impl GridMedium {
+    pub fn new(
+        sigma_t: &GridVolumeDesc,
+        albedo: &VolumeDesc,
+        scale: f32,
+        phase: Phase,
+        index: usize,
+    ) -> Result<GridMedium, RenderError> {
+        let what = format!("medium {index} sigma_t");
+        if !(scale.is_finite() && scale >= 0.0) {
+            return Err(RenderError::InvalidScene(format!(
+                "medium {index}: scale = {scale}; must be finite and >= 0"
+            )));
+        }
+        let tex = GridTex::new(sigma_t, &what)?;
+        let albedo = match albedo {
+            VolumeDesc::Constant(a) => Albedo::Constant(crate::math::rgb(*a)),
+            VolumeDesc::Grid(g) => {
+                Albedo::Grid(GridTex::new(g, &format!("medium {index} albedo"))?)
+            }
+        };
+        let maj_res = [0, 1, 2].map(|k| MAJORANT_RES.min(tex.res[k]));
+        let mut maj = vec![0f32; maj_res[0] * maj_res[1] * maj_res[2]];
+        // Voxel index range that a lookup inside super-voxel `c` along axis k
+        // can touch: trilinear reads floor(u·res - 0.5) and the next voxel,
+        // for u in [c/R, (c+1)/R]; this range also covers `nearest`.
+        let range = |k: usize, c: usize| {
+            let r = tex.res[k] as f64;
+            let rr = maj_res[k] as f64;
+            let lo = ((c as f64 / rr) * r - 0.5).floor() as i64;
+            let hi = (((c + 1) as f64 / rr) * r - 0.5).floor() as i64 + 1;
+            let n = tex.res[k] as i64 - 1;
+            (lo.clamp(0, n) as usize, hi.clamp(0, n) as usize)
+        };
+        for cz in 0..maj_res[2] {
+            let (z0, z1) = range(2, cz);
+            for cy in 0..maj_res[1] {
+                let (y0, y1) = range(1, cy);
+                for cx in 0..maj_res[0] {
+                    let (x0, x1) = range(0, cx);
+                    let mut m = 0f32;
+                    for z in z0..=z1 {
+                        for y in y0..=y1 {
+                            for x in x0..=x1 {
+                                m = m.max(crate::math::max_comp(tex.voxel(x, y, z)));
+                            }
+                        }
+                    }
+                    // Interpolation weights sum to 1 only up to rounding; the
+                    // relative margin 1e-5 keeps the majorant a true bound.
+                    maj[(cz * maj_res[1] + cy) * maj_res[0] + cx] = m * scale * (1.0 + 1e-5);
+                }
+            }
+        }
+        Ok(GridMedium {
+            sigma_t: tex,
+            albedo,
+            scale,
+            phase,
+            maj_res,
+            maj,
+        })
+    }
+
+    #[inline]
+    fn sigma_t_unit(&self, u: Vec3) -> Spectrum {
+        self.sigma_t.eval_unit(u) * self.scale
+    }
+
+    /// Walk the super-voxels crossed by `ray` over `[0, t_max]`, calling
+    /// `f(t0, t1, μ)` for each piece with constant majorant `μ`, in order.
+    /// Returns the `Break` value if `f` stopped early. `o`, `d` are the ray in
+    /// unit-cube coordinates (same parameter `t` as in the world).
+    #[inline]
+    fn walk<B>(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        mut f: impl FnMut(f32, f32, f32) -> ControlFlow<B>,
+    ) -> ControlFlow<B> {
+        // Clip to the unit cube.
+        let inv = d.recip();
+        let ta = (Vec3::ZERO - o) * inv;
+        let tb = (Vec3::ONE - o) * inv;
+        let t_in = ta.min(tb).max_element().max(0.0);
+        let t_out = ta.max(tb).min_element().min(t_max);
+        if !(t_in < t_out) {
+            return ControlFlow::Continue(());
+        }
+        let res = Vec3::new(
+            self.maj_res[0] as f32,
+            self.maj_res[1] as f32,
+            self.maj_res[2] as f32,
+        );
+        let p = (o + d * t_in) * res;
+        let mut cell = [0i32; 3];
+        let mut step = [0i32; 3];
+        let mut t_next = [f32::INFINITY; 3];
+        let mut dt = [f32::INFINITY; 3];
+        for k in 0..3 {
+            cell[k] = (p[k].floor() as i32).clamp(0, self.maj_res[k] as i32 - 1);
+            if d[k] > 0.0 {
+                step[k] = 1;
+                t_next[k] = ((cell[k] + 1) as f32 / res[k] - o[k]) * inv[k];
+                dt[k] = inv[k] / res[k];
+            } else if d[k] < 0.0 {
+                step[k] = -1;
+                t_next[k] = (cell[k] as f32 / res[k] - o[k]) * inv[k];
+                dt[k] = -inv[k] / res[k];
+            }
+        }
+        let mut t = t_in;
+        loop {
+            // Axis whose boundary comes first.
+            let k = if t_next[0] < t_next[1] {
+                if t_next[0] < t_next[2] {
+                    0
+                } else {
+                    2
+                }
+            } else if t_next[1] < t_next[2] {
+                1
+            } else {
+                2
+            };
+            let t1 = t_next[k].min(t_out);
+            let idx = (cell[2] as usize * self.maj_res[1] + cell[1] as usize) * self.maj_res[0]
+                + cell[0] as usize;
+            if t1 > t {
+                f(t, t1, self.maj[idx])?;
+            }
+            if t1 >= t_out {
+                return ControlFlow::Continue(());
+            }
+            t = t1;
+            cell[k] += step[k];
+            if cell[k] < 0 || cell[k] >= self.maj_res[k] as i32 {
+                return ControlFlow::Continue(());
+            }
+            t_next[k] += dt[k];
+        }
+    }
+
+    pub fn sample_distance(&self, ray: &Ray, t_max: f32, s: &mut Sampler) -> DistanceSample {
+        let o = self.sigma_t.to_unit.transform_point3(ray.o);
+        let d = self.sigma_t.to_unit.transform_vector3(ray.d);
+        let mut weight = Spectrum::ONE;
+        let grey = self.sigma_t.channels == 1;
+        // Remaining optical depth (in majorant units) to the next tentative collision.
+        let mut tau = -(1.0 - s.next_1d()).ln();
+        let r = self.walk(o, d, t_max, |t0, t1, mu| {
+            if mu <= 0.0 {
+                return ControlFlow::Continue(());
+            }
+            let mut t = t0;
+            loop {
+                let dt = tau / mu;
+                if t + dt >= t1 {
+                    tau -= mu * (t1 - t);
+                    return ControlFlow::Continue(());
+                }
+                t += dt;
+                if grey {
+                    // Classical delta tracking: real with probability σ_t/μ, weight = albedo.
+                    let sig = self.sigma_t.eval_unit_scalar(o + d * t) * self.scale;
+                    if s.next_1d() * mu < sig {
+                        weight *= match &self.albedo {
+                            Albedo::Constant(a) => *a,
+                            Albedo::Grid(g) => g.eval_world(ray.at(t)),
+                        };
+                        return ControlFlow::Break(t);
+                    }
+                    tau = -(1.0 - s.next_1d()).ln();
+                    continue;
+                }
+                let sig = self.sigma_t_unit(o + d * t);
+                let p_real = mean(sig) / mu;
+                if s.next_1d() < p_real {
+                    let albedo = match &self.albedo {
+                        Albedo::Constant(a) => *a,
+                        Albedo::Grid(g) => g.eval_world(ray.at(t)),
+                    };
+                    weight *= albedo * sig / mean(sig);
+                    return ControlFlow::Break(t);
+                }
+                // Null collision: weight 1 for a grey medium.
+                if sig.x != sig.y || sig.y != sig.z {
+                    weight *= (Spectrum::splat(mu) - sig) / (mu * (1.0 - p_real));
+                }
+                tau = -(1.0 - s.next_1d()).ln();
+            }
+        });
+        match r {
+            ControlFlow::Break(t) => DistanceSample {
+                t,
+                weight,
+                event: DistanceEvent::Scatter,
+            },
+            ControlFlow::Continue(()) => DistanceSample {
+                t: t_max,
+                weight,
+                event: DistanceEvent::Surface,
+            },
+        }
+    }
+
+    /// Ratio tracking: the product of `1 - σ_t/μ` over tentative collisions.
+    pub fn transmittance(&self, ray: &Ray, t_end: f32, s: &mut Sampler) -> Spectrum {
+        let o = self.sigma_t.to_unit.transform_point3(ray.o);
+        let d = self.sigma_t.to_unit.transform_vector3(ray.d);
+        let mut tr = Spectrum::ONE;
+        let grey = self.sigma_t.channels == 1;
+        let mut tau = -(1.0 - s.next_1d()).ln();
+        let r: ControlFlow<()> = self.walk(o, d, t_end, |t0, t1, mu| {
+            if mu <= 0.0 {
+                return ControlFlow::Continue(());
+            }
+            let mut t = t0;
+            loop {
+                let dt = tau / mu;
+                if t + dt >= t1 {
+                    tau -= mu * (t1 - t);
+                    return ControlFlow::Continue(());
+                }
+                t += dt;
+                if grey {
+                    let sig = self.sigma_t.eval_unit_scalar(o + d * t) * self.scale;
+                    tr *= (1.0 - sig / mu).max(0.0);
+                } else {
+                    let sig = self.sigma_t_unit(o + d * t);
+                    tr *= (Spectrum::ONE - sig / mu).max(Spectrum::ZERO);
+                }
+                // Russian roulette on small estimates keeps the cost bounded
+                // in dense regions; survivors are reweighted by 1/q, so the
+                // estimator stays unbiased.
+                let m = crate::math::max_comp(tr);
+                if m < 0.1 {
+                    let q = 0.75;
+                    if s.next_1d() < q {
+                        return ControlFlow::Break(());
+                    }
+                    tr /= 1.0 - q;
+                }
+                tau = -(1.0 - s.next_1d()).ln();
+            }
+        });
+        match r {
+            ControlFlow::Break(()) => Spectrum::ZERO,
+            ControlFlow::Continue(()) => tr,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fgf_io::vol::VolGrid;
+    use std::sync::Arc;
+
+    fn grid(res: [usize; 3], data: Vec<f32>) -> GridVolumeDesc {
+        GridVolumeDesc {
+            grid: Arc::new(VolGrid {
+                shape: res,
+                channels: 1,
+                bbox: [0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+                data,
+            }),
+            to_world: glam::Mat4::IDENTITY,
+            use_grid_bbox: false,
+            filter: GridFilter::Trilinear,
+            wrap_clamp: true,
+        }
+    }
+
+    /// Values measured with Mitsuba 3.9.1 on a 2×1×1 grid (0, 1).
+    #[test]
+    fn trilinear_lookup_matches_mitsuba() {
+        let t = GridTex::new(&grid([2, 1, 1], vec![0.0, 1.0]), "t").unwrap();
+        for (x, v) in [
+            (0.1f32, 0.0f32),
+            (0.25, 0.0),
+            (0.3, 0.1),
+            (0.5, 0.5),
+            (0.7, 0.9),
+            (0.9, 1.0),
+        ] {
+            let got = t.eval_unit(Vec3::new(x, 0.5, 0.5)).x;
+            assert!((got - v).abs() < 1e-5, "{x}: {got} vs {v}");
+        }
+    }
+
+    /// Every trilinear lookup is bounded by its super-voxel's majorant.
+    #[test]
+    fn majorant_bounds_lookups() {
+        let res = [37, 20, 9];
+        let mut s = Sampler::new(3, 0, 0);
+        let data: Vec<f32> = (0..res.iter().product::<usize>())
+            .map(|_| s.next_1d().powi(4) * 10.0)
+            .collect();
+        let m = GridMedium::new(
+            &grid(res, data),
+            &VolumeDesc::Constant([1.0; 3]),
+            2.0,
+            Phase::Isotropic,
+            0,
+        )
+        .unwrap();
+        for _ in 0..20_000 {
+            let u = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+            let c =
+                [0, 1, 2].map(|k| ((u[k] * m.maj_res[k] as f32) as usize).min(m.maj_res[k] - 1));
+            let mu = m.maj[(c[2] * m.maj_res[1] + c[1]) * m.maj_res[0] + c[0]];
+            assert!(m.sigma_t_unit(u).x <= mu, "{u:?}");
+        }
+    }
+
+    /// The DDA covers [t_in, t_out] with contiguous pieces.
+    #[test]
+    fn dda_pieces_are_contiguous() {
+        let m = GridMedium::new(
+            &grid([16, 16, 16], vec![1.0; 4096]),
+            &VolumeDesc::Constant([1.0; 3]),
+            1.0,
+            Phase::Isotropic,
+            0,
+        )
+        .unwrap();
+        let mut s = Sampler::new(4, 0, 0);
+        for _ in 0..500 {
+            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 3.0 - Vec3::ONE;
+            let d = crate::math::sample_uniform_sphere(s.next_2d());
+            let mut last: Option<f32> = None;
+            let mut total = 0.0;
+            let _ = m.walk(o, d, f32::INFINITY, |t0, t1, _| -> ControlFlow<()> {
+                if let Some(l) = last {
+                    assert!((t0 - l).abs() < 1e-5);
+                }
+                last = Some(t1);
+                total += t1 - t0;
+                ControlFlow::Continue(())
+            });
+            // Chord length through the unit cube.
+            let inv = d.recip();
+            let ta = (Vec3::ZERO - o) * inv;
+            let tb = (Vec3::ONE - o) * inv;
+            let chord = (ta.max(tb).min_element() - ta.min(tb).max_element().max(0.0)).max(0.0);
+            assert!((total - chord).abs() < 1e-4, "{total} vs {chord}");
+        }
+    }
+}

@@ -1,0 +1,130 @@
+//! Homogeneous medium: analytic free flights with one-sample spectral MIS.
+//!
+//! A flight picks a channel `c` uniformly and samples `t ~ σ_c e^{-σ_c t}`.
+//! The flight's density is then the mixture `p(t) = (1/3) Σ_c σ_c e^{-σ_c t}`
+//! (and `P(t ≥ t_max) = (1/3) Σ_c e^{-σ_c t_max}` for reaching the surface),
+//! and the weight is the RGB integrand over that mixture (balance heuristic
+//! over channels, as in pbrt-v4 and Mitsuba's spectral `volpath`). For a grey
+//! medium it reduces to the albedo at a scattering event and 1 at a surface.
+//!
+//! The integrator uses the path-level variant instead
+//! ([`Homogeneous::sample_distance_hero`]): one hero channel per path and
+//! the channel pdf ratios `r`, combined over the whole path; the
+//! per-segment mixture is kept for callers that sample a single flight.
+
+use super::{DistanceEvent, DistanceSample};
+use crate::geometry::Ray;
+use crate::math::{mean, Sampler, Spectrum};
+use crate::phase::Phase;
+
+#[derive(Debug, Clone)]
+pub struct Homogeneous {
+    pub sigma_t: Spectrum,
+    /// `albedo · sigma_t`.
+    pub sigma_s: Spectrum,
+    pub phase: Phase,
+}
+
+/// `e^{-σ t}` per channel with `0·∞ = 0` (a channel without extinction
+/// transmits everything, even over an infinite distance).
+#[inline]
+fn tr(sigma_t: Spectrum, t: f32) -> Spectrum {
+    let f = |s: f32| if s == 0.0 { 1.0 } else { (-s * t).exp() };
+    Spectrum::new(f(sigma_t.x), f(sigma_t.y), f(sigma_t.z))
+}
+
+impl Homogeneous {
+    pub fn new(sigma_t: Spectrum, albedo: Spectrum, phase: Phase) -> Self {
+        Homogeneous {
+            sigma_t,
+            sigma_s: sigma_t * albedo,
+            phase,
+        }
+    }
+
+    pub fn sample_distance(&self, _ray: &Ray, t_max: f32, s: &mut Sampler) -> DistanceSample {
+        let c = ((s.next_1d() * 3.0) as usize).min(2);
+        let sigma_c = self.sigma_t[c];
+        // Inversion of the exponential CDF; 1 - u ∈ (0, 1] keeps ln finite.
+        let t = if sigma_c > 0.0 {
+            -(1.0 - s.next_1d()).ln() / sigma_c
+        } else {
+            f32::INFINITY
+        };
+        if t < t_max {
+            let trv = tr(self.sigma_t, t);
+            let pdf = mean(self.sigma_t * trv);
+            DistanceSample {
+                t,
+                weight: self.sigma_s * trv / pdf,
+                event: DistanceEvent::Scatter,
+            }
+        } else {
+            let trv = tr(self.sigma_t, t_max);
+            let p = mean(trv);
+            let weight = if p > 0.0 { trv / p } else { Spectrum::ZERO };
+            DistanceSample {
+                t: t_max,
+                weight,
+                event: DistanceEvent::Surface,
+            }
+        }
+    }
+
+    /// Free flight sampled with the pdf of channel `hero` only; returns the
+    /// sample (weight = integrand / hero pdf) and the ratio `r` of every
+    /// channel's pdf to the hero's (see `Medium::sample_distance_spectral`).
+    pub fn sample_distance_hero(
+        &self,
+        t_max: f32,
+        hero: usize,
+        s: &mut Sampler,
+    ) -> (DistanceSample, Spectrum) {
+        let sigma_h = self.sigma_t[hero];
+        let t = if sigma_h > 0.0 {
+            -(1.0 - s.next_1d()).ln() / sigma_h
+        } else {
+            f32::INFINITY
+        };
+        if t < t_max {
+            let trv = tr(self.sigma_t, t);
+            // σ_h t ≤ -ln(2⁻²⁴) ≈ 16.6, so the hero pdf is ≥ σ_h·6e-8: no underflow.
+            let pdf_h = sigma_h * trv[hero];
+            let r = self.sigma_t * trv / pdf_h;
+            (
+                DistanceSample {
+                    t,
+                    weight: self.sigma_s * trv / pdf_h,
+                    event: DistanceEvent::Scatter,
+                },
+                r,
+            )
+        } else {
+            let trv = tr(self.sigma_t, t_max);
+            let p_h = trv[hero];
+            if !(p_h > 0.0) {
+                return (
+                    DistanceSample {
+                        t: t_max,
+                        weight: Spectrum::ZERO,
+                        event: DistanceEvent::Surface,
+                    },
+                    Spectrum::ONE,
+                );
+            }
+            (
+                DistanceSample {
+                    t: t_max,
+                    weight: trv / p_h,
+                    event: DistanceEvent::Surface,
+                },
+                trv / p_h,
+            )
+        }
+    }
+
+    #[inline]
+    pub fn transmittance(&self, t_end: f32) -> Spectrum {
+        tr(self.sigma_t, t_end)
+    }
+}

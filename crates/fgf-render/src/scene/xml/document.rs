@@ -1,0 +1,422 @@
+//! Stage 1 of the loader: XML text -> an owned tree of [`XNode`]s with
+//! `<include>` expanded, `<default>`s applied and every `$name` substituted.
+//! Each node remembers its file and line so that later errors can name them.
+
+use crate::scene::error::{SceneError, SceneErrorKind};
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Nesting deeper than this is refused. Real Mitsuba scenes nest about six
+/// levels (scene > shape > medium > volume > transform > scale); the limit
+/// keeps the recursive stages' stack use bounded on hostile input.
+const MAX_DEPTH: usize = 32;
+/// Include nesting limit (an include chain this long is certainly a mistake).
+const MAX_INCLUDE_DEPTH: usize = 16;
+/// Total elements over the scene and all its includes: bounds the memory an
+/// include "diamond" (a file including another one many times) can take.
+const MAX_NODES: usize = 2_000_000;
+
+/// One XML element, owned, with substituted attribute values.
+#[derive(Debug)]
+pub(crate) struct XNode {
+    pub tag: String,
+    pub attrs: Vec<(String, String)>,
+    pub children: Vec<XNode>,
+    /// The file this element was written in (the scene or an included file).
+    pub file: Arc<PathBuf>,
+    /// Directory that relative file names in this element resolve against.
+    pub dir: Arc<PathBuf>,
+    pub line: u32,
+    pub col: u32,
+}
+
+impl XNode {
+    pub fn attr(&self, key: &str) -> Option<&str> {
+        self.attrs
+            .iter()
+            .find(|(k, _)| k == key)
+            .map(|(_, v)| v.as_str())
+    }
+
+    /// The tag as the user wrote it, with its identifying attributes:
+    /// `<shape type="obj">`, `<float name="fov">`, `<ref id="glass">`.
+    pub fn label(&self) -> String {
+        let mut s = format!("<{}", self.tag);
+        for key in ["type", "name", "id"] {
+            if let Some(v) = self.attr(key) {
+                s.push_str(&format!(" {key}=\"{v}\""));
+            }
+        }
+        s.push('>');
+        s
+    }
+
+    pub fn err_kind(&self, kind: SceneErrorKind, message: impl Into<String>) -> SceneError {
+        SceneError {
+            kind,
+            file: self.file.as_ref().clone(),
+            pos: Some((self.line, self.col)),
+            tag: Some(self.label()),
+            message: message.into(),
+        }
+    }
+
+    /// An [`SceneErrorKind::Invalid`] error at this element.
+    pub fn err(&self, message: impl Into<String>) -> SceneError {
+        self.err_kind(SceneErrorKind::Invalid, message)
+    }
+
+    /// Reject attributes other than `allowed`.
+    pub fn check_attrs(&self, allowed: &[&str]) -> Result<(), SceneError> {
+        for (k, _) in &self.attrs {
+            if !allowed.contains(&k.as_str()) {
+                return Err(self.err(format!(
+                    "unknown attribute '{k}' (allowed here: {})",
+                    allowed.join(", ")
+                )));
+            }
+        }
+        Ok(())
+    }
+
+    /// A required attribute.
+    pub fn req_attr(&self, key: &str) -> Result<&str, SceneError> {
+        self.attr(key)
+            .ok_or_else(|| self.err(format!("missing attribute '{key}'")))
+    }
+
+    /// Resolve a file name written in this element against its directory.
+    pub fn resolve(&self, file: &str) -> PathBuf {
+        let p = Path::new(file);
+        if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            self.dir.join(p)
+        }
+    }
+}
+
+struct Builder {
+    /// `$name` values: the caller's defines, then `<default>`s for names the
+    /// caller did not define.
+    params: HashMap<String, String>,
+    /// Canonical paths of the files being included (cycle detection).
+    stack: Vec<PathBuf>,
+    nodes: usize,
+}
+
+/// Parse `xml` (the scene named `source_name`) into the top-level elements of
+/// its `<scene>`, includes spliced in place.
+pub(crate) fn build(
+    xml: &str,
+    source_name: &str,
+    base_dir: &Path,
+    defines: &[(String, String)],
+) -> Result<Vec<XNode>, SceneError> {
+    let mut b = Builder {
+        params: HashMap::new(),
+        stack: Vec::new(),
+        nodes: 0,
+    };
+    for (k, v) in defines {
+        if !is_ident(k) {
+            return Err(SceneError::new(
+                SceneErrorKind::Invalid,
+                source_name,
+                format!("invalid define name '{k}' (must be letters, digits or '_', not starting with a digit)"),
+            ));
+        }
+        b.params.insert(k.clone(), v.clone());
+    }
+    if let Ok(canon) = std::fs::canonicalize(source_name) {
+        b.stack.push(canon);
+    }
+    let file = Arc::new(PathBuf::from(source_name));
+    let dir = Arc::new(base_dir.to_path_buf());
+    let mut out = Vec::new();
+    b.file(xml, &file, &dir, &mut out)?;
+    Ok(out)
+}
+
+fn is_ident(s: &str) -> bool {
+    let mut c = s.chars();
+    matches!(c.next(), Some(ch) if ch.is_ascii_alphabetic() || ch == '_')
+        && c.all(|ch| ch.is_ascii_alphanumeric() || ch == '_')
+}
+
+fn pos_of(doc: &roxmltree::Document, node: roxmltree::Node) -> (u32, u32) {
+    let p = doc.text_pos_at(node.range().start);
+    (p.row, p.col)
+}
+
+impl Builder {
+    /// Parse one file's text and append its `<scene>`'s children to `out`.
+    fn file(
+        &mut self,
+        xml: &str,
+        file: &Arc<PathBuf>,
+        dir: &Arc<PathBuf>,
+        out: &mut Vec<XNode>,
+    ) -> Result<(), SceneError> {
+        let opts = roxmltree::ParsingOptions {
+            allow_dtd: false,
+            nodes_limit: MAX_NODES as u32,
+            ..Default::default()
+        };
+        let doc = roxmltree::Document::parse_with_options(xml, opts).map_err(|e| {
+            let p = e.pos();
+            SceneError {
+                kind: SceneErrorKind::Syntax,
+                file: file.as_ref().clone(),
+                pos: Some((p.row, p.col)),
+                tag: None,
+                message: format!("malformed XML: {e}"),
+            }
+        })?;
+        let root = doc.root_element();
+        let (line, col) = pos_of(&doc, root);
+        let here = |tag: Option<String>, msg: String| SceneError {
+            kind: SceneErrorKind::Invalid,
+            file: file.as_ref().clone(),
+            pos: Some((line, col)),
+            tag,
+            message: msg,
+        };
+        if root.tag_name().name() != "scene" {
+            return Err(here(
+                Some(format!("<{}>", root.tag_name().name())),
+                "the root element must be <scene version=\"3.0.0\">".into(),
+            ));
+        }
+        match root.attribute("version") {
+            None => {
+                return Err(here(
+                    Some("<scene>".into()),
+                    "missing attribute 'version' (write <scene version=\"3.0.0\">)".into(),
+                ))
+            }
+            Some(v) => {
+                let major = v.split('.').next().unwrap_or("");
+                if major.trim() != "3" {
+                    return Err(here(
+                        Some("<scene>".into()),
+                        format!("version \"{v}\" is not supported: this loader reads Mitsuba 3 scenes (version=\"3.x.y\")"),
+                    ));
+                }
+            }
+        }
+        for a in root.attributes() {
+            if a.name() != "version" {
+                return Err(here(
+                    Some("<scene>".into()),
+                    format!("unknown attribute '{}' (allowed here: version)", a.name()),
+                ));
+            }
+        }
+        // `<default>`s first, so that a `$name` may be used before the
+        // `<default>` that defines it, as in Mitsuba. The caller's defines win.
+        for child in root.children().filter(|n| n.is_element()) {
+            if child.tag_name().name() == "default" {
+                let node = self.convert(&doc, child, file, dir, 0)?;
+                node.check_attrs(&["name", "value"])?;
+                let name = node.req_attr("name")?;
+                let value = node.req_attr("value")?;
+                if !is_ident(name) {
+                    return Err(node.err(format!(
+                        "invalid default name '{name}' (must be letters, digits or '_', not starting with a digit)"
+                    )));
+                }
+                if !node.children.is_empty() {
+                    return Err(node.err("<default> takes no children"));
+                }
+                self.params
+                    .entry(name.to_string())
+                    .or_insert_with(|| value.to_string());
+            }
+        }
+        for child in root.children() {
+            if child.is_text() && !child.text().unwrap_or("").trim().is_empty() {
+                let (l, c) = pos_of(&doc, child);
+                return Err(SceneError {
+                    kind: SceneErrorKind::Invalid,
+                    file: file.as_ref().clone(),
+                    pos: Some((l, c)),
+                    tag: Some("<scene>".into()),
+                    message: "unexpected text inside <scene>".into(),
+                });
+            }
+            if !child.is_element() {
+                continue;
+            }
+            match child.tag_name().name() {
+                "default" => {}
+                "include" => {
+                    let node = self.convert(&doc, child, file, dir, 0)?;
+                    self.include(&node, out)?;
+                }
+                _ => {
+                    let node = self.convert(&doc, child, file, dir, 0)?;
+                    out.push(node);
+                }
+            }
+        }
+        Ok(())
+    }
+
+    fn include(&mut self, node: &XNode, out: &mut Vec<XNode>) -> Result<(), SceneError> {
+        node.check_attrs(&["filename"])?;
+        if !node.children.is_empty() {
+            return Err(node.err("<include> takes no children"));
+        }
+        if self.stack.len() >= MAX_INCLUDE_DEPTH {
+            return Err(node.err(format!(
+                "includes nested more than {MAX_INCLUDE_DEPTH} deep"
+            )));
+        }
+        let name = node.req_attr("filename")?;
+        let path = node.resolve(name);
+        let bytes = std::fs::read(&path).map_err(|e| {
+            node.err_kind(
+                SceneErrorKind::Io,
+                format!("cannot read included file '{}': {e}", path.display()),
+            )
+        })?;
+        let canon = std::fs::canonicalize(&path).unwrap_or_else(|_| path.clone());
+        if self.stack.contains(&canon) {
+            return Err(node.err(format!(
+                "include cycle: '{}' includes itself (through: {})",
+                path.display(),
+                self.stack
+                    .iter()
+                    .map(|p| p.display().to_string())
+                    .collect::<Vec<_>>()
+                    .join(" -> ")
+            )));
+        }
+        let text = String::from_utf8(bytes).map_err(|_| {
+            node.err_kind(
+                SceneErrorKind::Format,
+                format!("included file '{}' is not valid UTF-8", path.display()),
+            )
+        })?;
+        let file = Arc::new(path.clone());
+        let dir = Arc::new(match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
+            _ => PathBuf::from("."),
+        });
+        self.stack.push(canon);
+        let r = self.file(&text, &file, &dir, out);
+        self.stack.pop();
+        // Name the including line too: the included file's own error is
+        // complete, but the user needs to know where it was included from.
+        r.map_err(|mut e| {
+            e.message = format!(
+                "{} (included from {}:{}:{})",
+                e.message,
+                node.file.display(),
+                node.line,
+                node.col
+            );
+            e
+        })
+    }
+
+    /// Convert an element and its descendants, substituting `$name`s.
+    fn convert(
+        &mut self,
+        doc: &roxmltree::Document,
+        n: roxmltree::Node,
+        file: &Arc<PathBuf>,
+        dir: &Arc<PathBuf>,
+        depth: usize,
+    ) -> Result<XNode, SceneError> {
+        let (line, col) = pos_of(doc, n);
+        self.nodes += 1;
+        let mut node = XNode {
+            tag: n.tag_name().name().to_string(),
+            attrs: Vec::new(),
+            children: Vec::new(),
+            file: file.clone(),
+            dir: dir.clone(),
+            line,
+            col,
+        };
+        if n.tag_name().namespace().is_some() {
+            return Err(node.err("XML namespaces are not supported in Mitsuba scenes"));
+        }
+        if self.nodes > MAX_NODES {
+            return Err(node.err(format!(
+                "the scene has more than {MAX_NODES} elements (with its includes)"
+            )));
+        }
+        if depth > MAX_DEPTH {
+            return Err(node.err(format!("elements nested more than {MAX_DEPTH} deep")));
+        }
+        for a in n.attributes() {
+            let v = self.substitute(&node, a.name(), a.value())?;
+            node.attrs.push((a.name().to_string(), v));
+        }
+        for c in n.children() {
+            if c.is_element() {
+                if matches!(c.tag_name().name(), "default" | "include") {
+                    let child = self.convert(doc, c, file, dir, depth + 1)?;
+                    return Err(child.err(format!(
+                        "<{}> is only allowed directly inside <scene>",
+                        child.tag
+                    )));
+                }
+                let child = self.convert(doc, c, file, dir, depth + 1)?;
+                node.children.push(child);
+            } else if c.is_text() && !c.text().unwrap_or("").trim().is_empty() {
+                return Err(node.err(format!(
+                    "unexpected text '{}' inside the element (values go in a value=\"...\" attribute)",
+                    c.text().unwrap_or("").trim().chars().take(40).collect::<String>()
+                )));
+            }
+        }
+        Ok(node)
+    }
+
+    /// Replace every `$name` (longest identifier after the `$`) by its value.
+    /// A `$` not followed by an identifier is kept as is.
+    fn substitute(&self, node: &XNode, attr: &str, value: &str) -> Result<String, SceneError> {
+        if !value.contains('$') {
+            return Ok(value.to_string());
+        }
+        let mut out = String::with_capacity(value.len());
+        let mut rest = value;
+        while let Some(i) = rest.find('$') {
+            out.push_str(&rest[..i]);
+            let after = &rest[i + 1..];
+            let len = after
+                .char_indices()
+                .take_while(|(j, ch)| {
+                    ch.is_ascii_alphanumeric() && !(*j == 0 && ch.is_ascii_digit()) || *ch == '_'
+                })
+                .map(|(j, ch)| j + ch.len_utf8())
+                .last()
+                .unwrap_or(0);
+            if len == 0 {
+                out.push('$');
+                rest = after;
+                continue;
+            }
+            let name = &after[..len];
+            match self.params.get(name) {
+                Some(v) => out.push_str(v),
+                None => {
+                    let mut known: Vec<&str> = self.params.keys().map(|s| s.as_str()).collect();
+                    known.sort_unstable();
+                    return Err(node.err(format!(
+                        "attribute {attr}=\"{value}\" uses ${name}, which has no <default name=\"{name}\" .../> and was not defined by the caller (defined: {})",
+                        if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                    )));
+                }
+            }
+            rest = &after[len..];
+        }
+        out.push_str(rest);
+        Ok(out)
+    }
+}

@@ -1,0 +1,533 @@
+//! The children of a plugin element, type-checked on demand.
+//!
+//! A plugin asks for each parameter it knows by name and type; whatever is
+//! left when it calls [`Props::finish`] is an unknown parameter or an
+//! unexpected nested object, and is reported with the list of the plugin's
+//! parameters. Duplicate names are reported when the bag is built.
+
+use super::document::XNode;
+use super::transform;
+use crate::scene::error::SceneError;
+use glam::DMat4;
+use std::cell::Cell;
+use std::collections::HashMap;
+
+/// Property tags (values); everything else that may appear inside a plugin
+/// is an object tag or `<ref>`.
+pub(crate) const PROPERTY_TAGS: &[&str] = &[
+    "float",
+    "integer",
+    "boolean",
+    "string",
+    "rgb",
+    "spectrum",
+    "point",
+    "vector",
+    "transform",
+];
+/// Object tags that may appear nested in a plugin.
+pub(crate) const OBJECT_TAGS: &[&str] = &[
+    "bsdf",
+    "emitter",
+    "medium",
+    "phase",
+    "volume",
+    "rfilter",
+    "sampler",
+    "film",
+    "shape",
+    "sensor",
+    "integrator",
+    "texture",
+];
+
+/// One child of a plugin: a property, a nested object, or a `<ref>` (then
+/// `target` is the referenced object and `node` the `<ref>` itself).
+pub(crate) struct Entry<'a> {
+    pub node: &'a XNode,
+    pub target: &'a XNode,
+    pub name: Option<&'a str>,
+    used: Cell<bool>,
+}
+
+impl<'a> Entry<'a> {
+    pub fn is_property(&self) -> bool {
+        PROPERTY_TAGS.contains(&self.node.tag.as_str())
+    }
+
+    fn value_attr(&self) -> Result<&'a str, SceneError> {
+        self.node.check_attrs(&["name", "value"])?;
+        if !self.node.children.is_empty() {
+            return Err(self.node.err("a property takes no children"));
+        }
+        self.node.req_attr("value")
+    }
+
+    fn expect(&self, what: &str) -> SceneError {
+        self.node.err(format!(
+            "parameter '{}' must be {what}, not <{}>",
+            self.name.unwrap_or("?"),
+            self.node.tag
+        ))
+    }
+
+    /// `<float>` or `<integer>` (Mitsuba accepts an integer where a float is
+    /// expected), finite.
+    pub fn float(&self) -> Result<f64, SceneError> {
+        if !matches!(self.node.tag.as_str(), "float" | "integer") {
+            return Err(self.expect("a <float>"));
+        }
+        let s = self.value_attr()?;
+        parse_f64(self.node, self.name.unwrap_or("?"), s)
+    }
+
+    pub fn int(&self) -> Result<i64, SceneError> {
+        if self.node.tag != "integer" {
+            return Err(self.expect("an <integer>"));
+        }
+        let s = self.value_attr()?;
+        s.trim().parse::<i64>().map_err(|_| {
+            self.node.err(format!(
+                "cannot parse '{s}' as an integer for parameter '{}'",
+                self.name.unwrap_or("?")
+            ))
+        })
+    }
+
+    pub fn bool(&self) -> Result<bool, SceneError> {
+        if self.node.tag != "boolean" {
+            return Err(self.expect("a <boolean>"));
+        }
+        let s = self.value_attr()?;
+        match s.trim().to_ascii_lowercase().as_str() {
+            "true" => Ok(true),
+            "false" => Ok(false),
+            _ => Err(self.node.err(format!(
+                "cannot parse '{s}' as a boolean for parameter '{}' (valid: true, false)",
+                self.name.unwrap_or("?")
+            ))),
+        }
+    }
+
+    pub fn string(&self) -> Result<&'a str, SceneError> {
+        if self.node.tag != "string" {
+            return Err(self.expect("a <string>"));
+        }
+        self.value_attr()
+    }
+
+    /// A colour: `<float>`/`<integer>` (grey), `<rgb>` (1 or 3 values) or a
+    /// uniform `<spectrum>` (one value).
+    pub fn color(&self) -> Result<[f64; 3], SceneError> {
+        let name = self.name.unwrap_or("?");
+        match self.node.tag.as_str() {
+            "float" | "integer" => {
+                let v = self.float()?;
+                Ok([v; 3])
+            }
+            "rgb" => {
+                let s = self.value_attr()?;
+                let v = parse_list(self.node, name, s)?;
+                match v.len() {
+                    1 => Ok([v[0]; 3]),
+                    3 => Ok([v[0], v[1], v[2]]),
+                    n => Err(self.node.err(format!(
+                        "<rgb> parameter '{name}' has {n} values, expected 1 (grey) or 3 (r, g, b)"
+                    ))),
+                }
+            }
+            "spectrum" => {
+                let s = self.value_attr()?;
+                if s.contains(':') {
+                    return Err(self.node.err(format!(
+                        "spectrum '{name}' with wavelength:value pairs is not supported (this renderer is RGB); use <rgb name=\"{name}\" value=\"r, g, b\"/> or a single uniform value"
+                    )));
+                }
+                let v = parse_list(self.node, name, s)?;
+                if v.len() != 1 {
+                    return Err(self.node.err(format!(
+                        "spectrum '{name}' has {} values; only a single uniform value is supported (use <rgb> for colours)",
+                        v.len()
+                    )));
+                }
+                Ok([v[0]; 3])
+            }
+            _ => Err(self.expect("a <float>, <rgb> or uniform <spectrum>")),
+        }
+    }
+
+    /// `<point>` or `<vector>`: `x`, `y`, `z` attributes (default 0) or a
+    /// 3-value `value`.
+    pub fn vec3(&self) -> Result<[f64; 3], SceneError> {
+        if !matches!(self.node.tag.as_str(), "point" | "vector") {
+            return Err(self.expect("a <point> or <vector>"));
+        }
+        self.node.check_attrs(&["name", "value", "x", "y", "z"])?;
+        if !self.node.children.is_empty() {
+            return Err(self.node.err("a property takes no children"));
+        }
+        xyz_or_value(self.node, self.name.unwrap_or("?"), 0.0)
+    }
+
+    pub fn transform(&self) -> Result<DMat4, SceneError> {
+        if self.node.tag != "transform" {
+            return Err(self.expect("a <transform>"));
+        }
+        self.node.check_attrs(&["name"])?;
+        transform::compose(self.node)
+    }
+}
+
+/// Parse a finite float; the message names the parameter.
+pub(crate) fn parse_f64(node: &XNode, name: &str, s: &str) -> Result<f64, SceneError> {
+    let v: f64 = s.trim().parse().map_err(|_| {
+        node.err(format!(
+            "cannot parse '{s}' as a number for parameter '{name}'"
+        ))
+    })?;
+    if !v.is_finite() {
+        return Err(node.err(format!("parameter '{name}' = {s} is not a finite number")));
+    }
+    // The description stores single precision: refuse what would overflow
+    // to inf or flush to 0 there, instead of changing the value silently.
+    if v.abs() > f32::MAX as f64 || (v != 0.0 && v.abs() < f32::MIN_POSITIVE as f64) {
+        return Err(node.err(format!(
+            "parameter '{name}' = {s} is outside single precision (|value| must be 0 or between 1.2e-38 and 3.4e38)"
+        )));
+    }
+    Ok(v)
+}
+
+/// Parse `"a, b, c"` or `"a b c"` into finite floats.
+pub(crate) fn parse_list(node: &XNode, name: &str, s: &str) -> Result<Vec<f64>, SceneError> {
+    let v = s
+        .split(|c: char| c == ',' || c.is_whitespace())
+        .filter(|t| !t.is_empty())
+        .map(|t| parse_f64(node, name, t))
+        .collect::<Result<Vec<_>, _>>()?;
+    if v.is_empty() {
+        return Err(node.err(format!("parameter '{name}' has an empty value")));
+    }
+    Ok(v)
+}
+
+/// `x`/`y`/`z` attributes (missing ones are `default`) or `value` with 3
+/// numbers, not both.
+pub(crate) fn xyz_or_value(node: &XNode, name: &str, default: f64) -> Result<[f64; 3], SceneError> {
+    let has_xyz = ["x", "y", "z"].iter().any(|k| node.attr(k).is_some());
+    match node.attr("value") {
+        Some(s) => {
+            if has_xyz {
+                return Err(node.err(format!(
+                    "'{name}' gives both value and x/y/z attributes; use one form"
+                )));
+            }
+            let v = parse_list(node, name, s)?;
+            if v.len() != 3 {
+                return Err(node.err(format!(
+                    "'{name}' value has {} numbers, expected 3 (x, y, z)",
+                    v.len()
+                )));
+            }
+            Ok([v[0], v[1], v[2]])
+        }
+        None => {
+            let mut out = [default; 3];
+            for (i, k) in ["x", "y", "z"].iter().enumerate() {
+                if let Some(s) = node.attr(k) {
+                    out[i] = parse_f64(node, &format!("{name}.{k}"), s)?;
+                }
+            }
+            Ok(out)
+        }
+    }
+}
+
+/// The children of a plugin element.
+pub(crate) struct Props<'a> {
+    pub node: &'a XNode,
+    entries: Vec<Entry<'a>>,
+    /// The parameter names this plugin knows, for messages.
+    known: &'static [&'static str],
+}
+
+impl<'a> Props<'a> {
+    /// Collect `node`'s children. `ids` resolves `<ref id>`; `known` lists
+    /// the plugin's parameter names (for the unknown-parameter message).
+    pub fn new(
+        node: &'a XNode,
+        ids: &HashMap<String, &'a XNode>,
+        known: &'static [&'static str],
+    ) -> Result<Self, SceneError> {
+        let mut entries: Vec<Entry<'a>> = Vec::new();
+        for c in &node.children {
+            let tag = c.tag.as_str();
+            let (target, name) = if tag == "ref" {
+                c.check_attrs(&["id", "name"])?;
+                if !c.children.is_empty() {
+                    return Err(c.err("<ref> takes no children"));
+                }
+                let id = c.req_attr("id")?;
+                let target = *ids.get(id).ok_or_else(|| {
+                    let mut all: Vec<&str> = ids.keys().map(|s| s.as_str()).collect();
+                    all.sort_unstable();
+                    c.err(format!(
+                        "reference to unknown id '{id}' (ids in this scene: {})",
+                        if all.is_empty() {
+                            "none".to_string()
+                        } else {
+                            all.join(", ")
+                        }
+                    ))
+                })?;
+                (target, c.attr("name"))
+            } else if PROPERTY_TAGS.contains(&tag) {
+                let name = c.req_attr("name")?;
+                if !known.contains(&name) {
+                    return Err(c.err(format!(
+                        "unknown parameter '{name}' of {} (known: {})",
+                        node.label(),
+                        list_or_none(known)
+                    )));
+                }
+                (c, Some(name))
+            } else if OBJECT_TAGS.contains(&tag) {
+                (c, c.attr("name"))
+            } else {
+                return Err(c.err(format!(
+                    "unknown element <{tag}> inside {} (supported: <ref>, {}, {})",
+                    node.label(),
+                    PROPERTY_TAGS
+                        .iter()
+                        .map(|t| format!("<{t}>"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
+                    OBJECT_TAGS
+                        .iter()
+                        .map(|t| format!("<{t}>"))
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                )));
+            };
+            if let Some(n) = name {
+                if let Some(prev) = entries.iter().find(|e| e.name == Some(n)) {
+                    return Err(c.err(format!(
+                        "parameter '{n}' is given twice (first at line {})",
+                        prev.node.line
+                    )));
+                }
+            }
+            entries.push(Entry {
+                node: c,
+                target,
+                name,
+                used: Cell::new(false),
+            });
+        }
+        Ok(Props {
+            node,
+            entries,
+            known,
+        })
+    }
+
+    /// Take the named entry, if present.
+    pub fn take(&self, name: &str) -> Option<&Entry<'a>> {
+        let e = self
+            .entries
+            .iter()
+            .find(|e| e.name == Some(name) && !e.used.get())?;
+        e.used.set(true);
+        Some(e)
+    }
+
+    /// Take every not-yet-used nested object (or reference) whose target tag is
+    /// `tag`, whatever its name.
+    pub fn take_objects(&self, tag: &str) -> Vec<&Entry<'a>> {
+        self.entries
+            .iter()
+            .filter(|e| !e.used.get() && !e.is_property() && e.target.tag == tag)
+            .inspect(|e| e.used.set(true))
+            .collect()
+    }
+
+    /// Take the named nested object of tag `tag`, if present.
+    pub fn take_object_named(&self, tag: &str, name: &str) -> Option<&Entry<'a>> {
+        let e = self.entries.iter().find(|e| {
+            !e.used.get() && !e.is_property() && e.target.tag == tag && e.name == Some(name)
+        })?;
+        e.used.set(true);
+        Some(e)
+    }
+
+    pub fn float(&self, name: &str) -> Result<Option<(f64, &'a XNode)>, SceneError> {
+        self.take(name)
+            .map(|e| Ok((e.float()?, e.node)))
+            .transpose()
+    }
+    pub fn int(&self, name: &str) -> Result<Option<(i64, &'a XNode)>, SceneError> {
+        self.take(name).map(|e| Ok((e.int()?, e.node))).transpose()
+    }
+    pub fn bool_or(&self, name: &str, default: bool) -> Result<bool, SceneError> {
+        Ok(self
+            .take(name)
+            .map(|e| e.bool())
+            .transpose()?
+            .unwrap_or(default))
+    }
+    pub fn string(&self, name: &str) -> Result<Option<(&'a str, &'a XNode)>, SceneError> {
+        self.take(name)
+            .map(|e| Ok((e.string()?, e.node)))
+            .transpose()
+    }
+    pub fn color(&self, name: &str) -> Result<Option<([f64; 3], &'a XNode)>, SceneError> {
+        self.take(name)
+            .map(|e| Ok((e.color()?, e.node)))
+            .transpose()
+    }
+    pub fn vec3(&self, name: &str) -> Result<Option<([f64; 3], &'a XNode)>, SceneError> {
+        self.take(name).map(|e| Ok((e.vec3()?, e.node))).transpose()
+    }
+    pub fn transform(&self, name: &str) -> Result<Option<(DMat4, &'a XNode)>, SceneError> {
+        self.take(name)
+            .map(|e| Ok((e.transform()?, e.node)))
+            .transpose()
+    }
+
+    /// A float with a default, checked by `ok`; `range` describes the valid
+    /// values in the message.
+    pub fn float_in(
+        &self,
+        name: &str,
+        default: f64,
+        ok: impl Fn(f64) -> bool,
+        range: &str,
+    ) -> Result<f64, SceneError> {
+        match self.float(name)? {
+            None => Ok(default),
+            Some((v, node)) => check(node, name, v, ok(v), range),
+        }
+    }
+
+    /// A required float, checked by `ok`.
+    pub fn float_req(
+        &self,
+        name: &str,
+        ok: impl Fn(f64) -> bool,
+        range: &str,
+    ) -> Result<f64, SceneError> {
+        match self.float(name)? {
+            None => Err(self.node.err(format!(
+                "missing required parameter '{name}' (valid: {range})"
+            ))),
+            Some((v, node)) => check(node, name, v, ok(v), range),
+        }
+    }
+
+    /// An integer with a default, checked by `ok`.
+    pub fn int_in(
+        &self,
+        name: &str,
+        default: i64,
+        ok: impl Fn(i64) -> bool,
+        range: &str,
+    ) -> Result<i64, SceneError> {
+        match self.int(name)? {
+            None => Ok(default),
+            Some((v, node)) => {
+                if ok(v) {
+                    Ok(v)
+                } else {
+                    Err(node.err(format!("invalid {name} = {v} (valid: {range})")))
+                }
+            }
+        }
+    }
+
+    /// A colour with a default, every channel checked by `ok`.
+    pub fn color_in(
+        &self,
+        name: &str,
+        default: [f64; 3],
+        ok: impl Fn(f64) -> bool,
+        range: &str,
+    ) -> Result<[f64; 3], SceneError> {
+        match self.color(name)? {
+            None => Ok(default),
+            Some((v, node)) => {
+                if v.iter().all(|&c| ok(c)) {
+                    Ok(v)
+                } else {
+                    Err(node.err(format!(
+                        "invalid {name} = ({}, {}, {}) (valid: each channel {range})",
+                        v[0], v[1], v[2]
+                    )))
+                }
+            }
+        }
+    }
+
+    /// A string among `choices`, with a default.
+    pub fn choice(
+        &self,
+        name: &str,
+        default: &'static str,
+        choices: &[&str],
+    ) -> Result<String, SceneError> {
+        match self.string(name)? {
+            None => Ok(default.to_string()),
+            Some((v, node)) => {
+                if choices.contains(&v) {
+                    Ok(v.to_string())
+                } else {
+                    Err(node.err(format!(
+                        "invalid {name} = '{v}' (valid: {})",
+                        choices.join(", ")
+                    )))
+                }
+            }
+        }
+    }
+
+    /// Error on anything not taken.
+    pub fn finish(&self) -> Result<(), SceneError> {
+        if let Some(e) = self.entries.iter().find(|e| !e.used.get()) {
+            if e.is_property() {
+                return Err(e.node.err(format!(
+                    "parameter '{}' of {} cannot be used here (known: {})",
+                    e.name.unwrap_or("?"),
+                    self.node.label(),
+                    list_or_none(self.known)
+                )));
+            }
+            return Err(e.node.err(format!(
+                "a nested <{}> is not allowed inside {}",
+                e.target.tag,
+                self.node.label(),
+            )));
+        }
+        Ok(())
+    }
+}
+
+pub(crate) fn check(
+    node: &XNode,
+    name: &str,
+    v: f64,
+    ok: bool,
+    range: &str,
+) -> Result<f64, SceneError> {
+    if ok {
+        Ok(v)
+    } else {
+        Err(node.err(format!("invalid {name} = {v} (valid: {range})")))
+    }
+}
+
+fn list_or_none(v: &[&str]) -> String {
+    if v.is_empty() {
+        "none".to_string()
+    } else {
+        v.join(", ")
+    }
+}

@@ -1,0 +1,159 @@
+"""Figure group 5, comparisons (``theory.md`` §4, §5.5), on the scene of
+group 4 (:mod:`fgf.figures.renders`).
+
+* **Kernels**: the same FGF medium (pink H = -0.1 and 2-fBm H = 1.2) under
+  the energy-conserving kernel (Guo 2019) and the reciprocal kernel
+  (Bitterli 2018).
+* **Bitterli models**: ``nonexponential`` media with the Davis–Weinstein
+  model (h = H+1, c = S_p^(1/(2H+2))/σ_m) and the Davis power law
+  (α = σ_m²/(S_kf L^(2H))) against the FGF media they equal (§3), both
+  under the reciprocal kernel: the images must agree up to Monte Carlo
+  noise.
+
+The third comparison of §5.5 (model vs explicit realizations) is the group
+:mod:`fgf.figures.ensemble`.
+
+Each row shows the two images and their difference (same exposure; the
+difference in a diverging colour map). The number reported is the mean
+relative error ``Σ|a - b| / Σ|b|`` over all pixels and channels (b the
+reference: the reciprocal kernel, the FGF medium).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ._common import Context, Figure, GroupResult, need, new_figure, save_figure, srgb_preview
+from .renders import CUBE_DIAGONAL, EXPOSURE, SIGMA_M, SW_RENDER, defines_for, image_stats, render, settings
+
+TITLE = "5a. Comparisons: energy-conserving vs reciprocal kernel; the Bitterli models"
+
+
+def steps(quick: bool) -> int:
+    return 4 + 4
+
+
+def mean_relative_error(a: np.ndarray, b: np.ndarray) -> float:
+    den = float(np.abs(b).sum())
+    return float(np.abs(a - b).sum() / den) if den > 0 else 0.0
+
+
+def noise_level(var_a: np.ndarray, var_b: np.ndarray, b: np.ndarray) -> float:
+    """The mean relative error two renders of the *same* expected image
+    would show from Monte Carlo noise alone: E|a - b| = sqrt(2/π) ·
+    sqrt(var_a + var_b) per pixel for Gaussian pixel errors, summed and
+    divided by Σ|b| like :func:`mean_relative_error`."""
+    den = float(np.abs(b).sum())
+    return float(np.sqrt(2.0 / np.pi) * np.sqrt(var_a + var_b).sum() / den) if den > 0 else 0.0
+
+
+def _rows_figure(ctx, rows, name: str, title: str, caption: str) -> Figure:
+    """rows: (label_a, img_a, label_b, img_b, row_title) -> a 3-column grid."""
+    fig = new_figure(10, 3.3 * len(rows))
+    axes = np.atleast_2d(fig.subplots(len(rows), 3))
+    for r, (la, a, lb, b, rt) in enumerate(rows):
+        axes[r, 0].imshow(srgb_preview(a, EXPOSURE))
+        axes[r, 0].set_title(f"{rt}\n{la}", fontsize=9)
+        axes[r, 1].imshow(srgb_preview(b, EXPOSURE))
+        axes[r, 1].set_title(lb, fontsize=9)
+        d = (a - b).mean(axis=2)
+        lim = float(np.percentile(np.abs(d), 99.5)) or 1.0
+        im = axes[r, 2].imshow(d, cmap="RdBu_r", vmin=-lim, vmax=lim)
+        axes[r, 2].set_title(f"difference (mean of RGB)\nmean rel. error {mean_relative_error(a, b):.3f}", fontsize=9)
+        fig.colorbar(im, ax=axes[r, 2], shrink=0.8, label="radiance")
+        for ax in axes[r]:
+            ax.set_axis_off()
+    return Figure(save_figure(fig, ctx.out, name), title, caption)
+
+
+def _kernels(ctx: Context, res: dict) -> Figure:
+    seed = ctx.seed + 600
+    rows = []
+    for hurst in (-0.1, 1.2):
+        sw = SW_RENDER
+        imgs = {}
+        for kernel in ("energy_conserving", "reciprocal"):
+            imgs[kernel] = render(ctx, defines_for("fgf", hurst=hurst, sw=sw, kernel=kernel), seed, return_variance=True)
+            ctx.tick()
+        (ec, ec_var), (rc, rc_var) = imgs["energy_conserving"], imgs["reciprocal"]
+        res[f"H={hurst}"] = {
+            "hurst": hurst,
+            "sw": sw,
+            "energy_conserving": image_stats(ec),
+            "reciprocal": image_stats(rc),
+            "mean_relative_difference": mean_relative_error(ec, rc),
+            "noise_level": noise_level(ec_var, rc_var, rc),
+        }
+        rows.append(("energy-conserving", ec, "reciprocal", rc, f"H = {hurst}, S_w = {sw:.3g}"))
+    s = settings(ctx.quick)
+    return _rows_figure(
+        ctx,
+        rows,
+        "comparison_kernels.png",
+        "Energy-conserving vs reciprocal kernel",
+        f"The FGF media of figure 4 (pink H = −0.1, 2-fBm H = 1.2; σ_m = {SIGMA_M:g}) under the energy-conserving "
+        "kernel (Guo 2019: free flights from −dTr/dt whatever the segment start) and the reciprocal kernel "
+        "(Bitterli 2018: T_sm from surfaces, T_mm from medium vertices). The kernels differ by design "
+        "(theory.md §4); the difference is largest where light scatters many times. The mean relative "
+        "error expected from Monte Carlo noise alone is in results.json (noise_level). "
+        f"{s['res']}², {s['spp']} spp, seed {seed}.",
+    )
+
+
+def _bitterli(ctx: Context, res: dict) -> Figure:
+    seed = ctx.seed + 700
+    Fgf = need("Fgf")
+    rows = []
+    # Pink noise = Davis–Weinstein with h = H+1, c = S_p^(1/(2H+2))/σ_m
+    # (fgf.Fgf.to_davis_weinstein, theory.md §3).
+    hurst = -0.1
+    sw = SW_RENDER
+    mapped = Fgf(SIGMA_M, hurst=hurst, sw=sw).to_davis_weinstein()
+    h, c = float(mapped.h), float(mapped.c)
+    dw = render(ctx, defines_for("davis_weinstein", h=h, c=c, kernel="reciprocal"), seed)
+    ctx.tick()
+    fp = render(ctx, defines_for("fgf", hurst=hurst, sw=sw, kernel="reciprocal"), seed)
+    ctx.tick()
+    res["davis_weinstein"] = {
+        "hurst": hurst,
+        "sw": sw,
+        "h": h,
+        "c": c,
+        "davis_weinstein": image_stats(dw),
+        "fgf": image_stats(fp),
+        "mean_relative_error": mean_relative_error(dw, fp),
+    }
+    rows.append(("Davis–Weinstein (Bitterli)", dw, "FGF pink noise", fp, f"h = {h:.2f}, c = {c:.3g}  ≡  H = {hurst}, S_w = {sw:.3g}"))
+    # k-fBm = Davis with α = σ_m²/(S_kf L^(2H)), L = √3 (fgf.Fgf.to_davis).
+    hurst = 1.2
+    sw = SW_RENDER
+    alpha = float(Fgf(SIGMA_M, hurst=hurst, sw=sw, length=CUBE_DIAGONAL).to_davis().alpha)
+    dv = render(ctx, defines_for("davis", alpha=alpha, kernel="reciprocal"), seed)
+    ctx.tick()
+    fk = render(ctx, defines_for("fgf", hurst=hurst, sw=sw, kernel="reciprocal"), seed)
+    ctx.tick()
+    res["davis"] = {
+        "hurst": hurst,
+        "sw": sw,
+        "alpha": alpha,
+        "davis": image_stats(dv),
+        "fgf": image_stats(fk),
+        "mean_relative_error": mean_relative_error(dv, fk),
+    }
+    rows.append(("Davis power law (Bitterli)", dv, "FGF 2-fBm", fk, f"α = {alpha:.3g}  ≡  H = {hurst}, S_w = {sw:.3g}, L = √3"))
+    return _rows_figure(
+        ctx,
+        rows,
+        "comparison_bitterli.png",
+        "The Bitterli models as FGF media",
+        "Bitterli et al.'s non-exponential models with the parameters that make them equal to FGF media "
+        "(theory.md §3): Davis–Weinstein ≡ pink noise, Davis ≡ k-fBm; both rendered with the reciprocal "
+        "kernel, the same seed. Equal models give equal images up to Monte Carlo noise (here up to "
+        "floating-point rounding of the parameters, since the random streams are shared).",
+    )
+
+
+def run(ctx: Context) -> GroupResult:
+    res: dict = {"kernels": {}, "bitterli": {}}
+    figs = [_kernels(ctx, res["kernels"]), _bitterli(ctx, res["bitterli"])]
+    return GroupResult(figs, res)

@@ -1,0 +1,157 @@
+"""Rendering Mitsuba 3 XML scenes with fgf's volumetric path tracer.
+
+>>> import fgf                                                   # doctest: +SKIP
+>>> img = fgf.render("scenes/default.xml", spp=16, seed=0)       # doctest: +SKIP
+>>> img.shape, img.dtype                                         # doctest: +SKIP
+((256, 256, 3), dtype('float32'))
+>>> fgf.write_exr("out.exr", img); fgf.write_png("out.png", img) # doctest: +SKIP
+
+The supported XML subset, the plugins and their parameters are documented
+in the Rust crate ``fgf-render`` (``scene/xml.rs`` and one table per plugin
+family). Images are linear RGB, row 0 at the top.
+"""
+
+from __future__ import annotations
+
+import os
+import sys
+from typing import Any, Callable, Mapping, Sequence
+
+import numpy as np
+
+from . import _core
+
+__all__ = ["render", "write_exr", "write_png"]
+
+
+def _defines_list(defines: Mapping[str, Any] | Sequence[str] | None) -> list[tuple[str, str]]:
+    if defines is None:
+        return []
+    if isinstance(defines, Mapping):
+        return [(str(k), str(v)) for k, v in defines.items()]
+    out = []
+    for d in defines:
+        if isinstance(d, str):
+            name, sep, value = d.partition("=")
+            if not sep or not name:
+                raise _core.ParameterError(f"define {d!r}: expected name=value")
+            out.append((name, value))
+        else:
+            name, value = d
+            out.append((str(name), str(value)))
+    return out
+
+
+class _TqdmOnFirstCall:
+    """A ``progress(done, total)`` callable that opens a tqdm bar lazily."""
+
+    def __init__(self) -> None:
+        self.bar = None
+        self.last = 0
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, unit="samples", unit_scale=True, desc="render", file=sys.stderr)
+        self.bar.update(done - self.last)
+        self.last = done
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+def render(
+    scene: str | os.PathLike,
+    spp: int | None = None,
+    seed: int | None = None,
+    threads: int | None = None,
+    defines: Mapping[str, Any] | Sequence[str] | None = None,
+    progress: bool | Any | Callable[[int, int], None] | None = True,
+    return_variance: bool = False,
+):
+    """Render a Mitsuba 3 XML scene file.
+
+    Parameters
+    ----------
+    scene : path
+        The scene file (relative paths inside it resolve against its folder).
+    spp : int, optional
+        Samples per pixel (default: the scene's ``sample_count``).
+    seed : int, optional
+        Sampler seed (default: the scene's sampler ``seed``, else 0). The
+        image depends only on the scene, ``spp`` and ``seed``, never on
+        ``threads``.
+    threads : int, optional
+        Worker threads (default: all cores).
+    defines : dict or list of "name=value", optional
+        Overrides of the scene's ``<default>`` values, like ``-D`` in the CLI.
+    progress : bool, tqdm-like object or callable, optional
+        ``True`` shows a tqdm bar when stderr is a terminal; ``False``/``None``
+        is quiet; an object with ``update(n)`` gets the samples finished; a
+        callable is called as ``progress(done, total)``.
+    return_variance : bool
+        Also return the per-pixel variance of the pixel mean.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``(H, W, 3)`` float32 linear RGB; with ``return_variance``, the pair
+        ``(image, variance)``.
+
+    Raises
+    ------
+    fgf.SceneError
+        The scene is invalid or outside the supported subset (the message
+        names file, line and tag).
+    OSError
+        A file cannot be read.
+    KeyboardInterrupt
+        On Ctrl-C, after the pass of samples in flight finishes (the CLI
+        instead writes the partial image; use it for long interruptible
+        renders).
+    """
+    closer = None
+    if progress is True:
+        if sys.stderr.isatty():
+            closer = _TqdmOnFirstCall()
+            progress = closer
+        else:
+            progress = None
+    elif progress is False:
+        progress = None
+    try:
+        img, var, done, interrupted = _core.render_scene(
+            os.fspath(scene),
+            spp=spp,
+            seed=seed,
+            threads=threads,
+            defines=_defines_list(defines),
+            progress=progress,
+            return_variance=return_variance,
+        )
+    finally:
+        if closer is not None:
+            closer.close()
+    if interrupted:
+        raise KeyboardInterrupt(f"render interrupted after {done} samples per pixel")
+    return (img, var) if return_variance else img
+
+
+def _as_image(img) -> np.ndarray:
+    a = np.ascontiguousarray(img, dtype=np.float32)
+    if a.ndim != 3 or a.shape[2] != 3:
+        raise _core.ParameterError(f"image has shape {a.shape}; expected (H, W, 3)")
+    return a
+
+
+def write_exr(path: str | os.PathLike, img) -> None:
+    """Write an ``(H, W, 3)`` image as a linear float32 EXR (atomically)."""
+    _core.write_exr(os.fspath(path), _as_image(img))
+
+
+def write_png(path: str | os.PathLike, img, exposure: float = 0.0) -> None:
+    """Write an ``(H, W, 3)`` linear image as an 8-bit sRGB PNG preview
+    (exposure in stops, then clamp, then the sRGB curve), atomically."""
+    _core.write_png(os.fspath(path), _as_image(img), float(exposure))
