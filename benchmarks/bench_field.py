@@ -16,7 +16,8 @@ precision like ours (complex64 transforms), which is the fair comparison.
 Each (case, implementation) runs in a fresh subprocess that synthesizes
 ``--repeats`` times; we report the best wall time and the process's peak
 resident memory (``ru_maxrss``, which includes the interpreter and numpy:
-about the ``baseline`` line). Run when the machine is quiet::
+about the ``baseline`` line), and that peak minus the process's resident
+size after its imports, in MiB and relative to the 64 MiB output array. Run when the machine is quiet::
 
     python benchmarks/bench_field.py            # both cases
     python benchmarks/bench_field.py --case pink --repeats 5
@@ -88,6 +89,8 @@ def scipy_version(seed):
     return f
 
 fn = ours if impl == "ours" else scipy_version
+import fgf, scipy.fft  # imported before measuring the baseline
+rss0 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
 times = []
 for r in range(repeats):
     t0 = time.perf_counter()
@@ -95,7 +98,8 @@ for r in range(repeats):
     times.append(time.perf_counter() - t0)
     assert f.shape == (N, N, N) and f.dtype == np.float32, (f.shape, f.dtype)
     del f
-print(json.dumps({"best": min(times), "times": times, "maxrss_mib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))
+rss1 = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+print(json.dumps({"best": min(times), "times": times, "maxrss_mib": rss1, "extra_mib": rss1 - rss0}))
 """ % {"N": N}
 
 BASELINE = "import json, resource, numpy, scipy.fft, fgf; print(json.dumps({'maxrss_mib': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))"
@@ -116,13 +120,14 @@ def main() -> int:
     print(f"machine: {os.cpu_count()} cores, load average {os.getloadavg()[0]:.2f} at start")
     base = json.loads(subprocess.run([sys.executable, "-c", BASELINE], check=True, capture_output=True, text=True).stdout)
     print(f"baseline (python + numpy + scipy.fft + fgf imported): {base['maxrss_mib']:.0f} MiB; output array {N**3 * 4 / 2**20:.0f} MiB")
-    print(f"{'case':6s} {'impl':6s} {'best s':>8s} {'peak MiB':>9s}")
+    print(f"{'case':6s} {'impl':6s} {'best s':>8s} {'peak MiB':>9s} {'peak - imports MiB':>19s} {'/ output':>9s}")
     ok = True
     for case in args.case or sorted(CASES, reverse=True):
         cfg = CASES[case]
         res = {impl: child(impl, cfg["hurst"], cfg["padding"], args.repeats) for impl in ("ours", "scipy")}
         for impl, r in res.items():
-            print(f"{case:6s} {impl:6s} {r['best']:8.3f} {r['maxrss_mib']:9.0f}")
+            out_mib = N**3 * 4 / 2**20
+            print(f"{case:6s} {impl:6s} {r['best']:8.3f} {r['maxrss_mib']:9.0f} {r['extra_mib']:19.0f} {r['extra_mib'] / out_mib:9.2f}")
         ratio = res["scipy"]["best"] / res["ours"]["best"]
         mem = res["ours"]["maxrss_mib"] / res["scipy"]["maxrss_mib"]
         print(f"{case:6s} speed-up {ratio:.2f}x, peak memory ours/scipy {mem:.2f}")

@@ -13,7 +13,7 @@ python -m pip install --quiet --disable-pip-version-check --upgrade pip
 if [ "${1:-}" = "--test" ]; then
     python -m pip install --quiet --disable-pip-version-check -r requirements-dev.txt
 else
-    python -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2" "numpy>=1.24" "matplotlib>=3.7" "tqdm>=4.60"
+    python -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2" "numpy>=1.24" "scipy>=1.10" "matplotlib>=3.7" "tqdm>=4.60"
 fi
 # Release build of the native module, installed in editable mode with the `fgf` command.
 maturin develop --release --quiet 2>&1 | grep -v -E '^(📦|🔗|🐍|💻|📡|🛠|✏️|🔨|Installed|Finished|Compiling)' || true

@@ -82,7 +82,8 @@ def s_p(h, sw):
 @pytest.mark.parametrize("hurst,sw", [(-0.5, 0.8), (-0.3, 0.3), (-0.05, 2.0)])
 def test_exact_optical_depth_line_average_variance(hurst, sw):
     n_rays, n_steps, t_max = 20000, 512, 4.0
-    tau, t = fgf.sample_optical_depth(n_rays, n_steps, t_max, hurst=hurst, sw=sw, seed=11, progress=False)
+    tau = fgf.sample_optical_depth(n_rays, n_steps, t_max, hurst=hurst, sw=sw, seed=11, progress=False)
+    t = np.linspace(0, t_max, n_steps + 1)
     for i in (1, 8, 64, 512):
         _check((tau[:, i] / t[i]) ** 2, s_p(hurst, sw) * t[i] ** (2 * hurst), f"var[sigma_bar] t={t[i]}")
     # The covariance across distances is the fBm's, Hurst h = H + 1.
@@ -101,6 +102,27 @@ def kfbm_point_variance(h, sw, x):
 @pytest.mark.parametrize("hurst", [0.3, 0.85, 1.2, 1.8, 2.5])
 def test_exact_kfbm_point_variance(hurst):
     m, n_steps, length, sw = 20000, 200, 3.0, 1.3
-    vals, x = fgf.sample_kfbm_1d(m, n_steps, length, hurst=hurst, sw=sw, seed=5, progress=False)
+    vals = fgf.sample_kfbm_1d(m, n_steps, length, hurst=hurst, sw=sw, seed=5, progress=False)
+    x = np.linspace(0, length, n_steps + 1)
     for i in (1, 50, 200):
         _check(vals[:, i] ** 2, kfbm_point_variance(hurst, sw, x[i]), f"k-fBm var H={hurst} x={x[i]}")
+
+
+def test_grid_line_average_second_moment_matches_the_discrete_expectation():
+    # 1D periodic pink noise: the mean of L consecutive samples has variance
+    # (S_w/dx)(1/N) sum_{m != 0} |k_m|^(-2s) |D_L(m)|^2 with the Dirichlet
+    # factor D_L(m) = (1/L) sum_{j<L} e^{2 pi i m j / N}. Each seed's
+    # estimate (a mean over all non-overlapping segments) is unbiased.
+    n, dx, h, sw, m = 4096, 1 / 4096, -0.3, 0.8, 200
+    lengths = [1, 4, 64, 512]
+    est = np.array(
+        [fgf.line_average_second_moment(fgf.synthesize((n,), hurst=h, sw=sw, spacing=dx, seed=i, dtype=np.float64, progress=False), lengths) for i in range(m)]
+    )
+    mm = np.fft.fftfreq(n) * n
+    k = 2 * np.pi * mm / (n * dx)
+    w = np.zeros(n)
+    w[1:] = np.abs(k[1:]) ** (-2 * (h + 0.5))
+    for col, L in enumerate(lengths):
+        dl = np.exp(2j * np.pi * np.outer(mm, np.arange(L)) / n).mean(axis=1)
+        want = sw / dx * np.sum(w * np.abs(dl) ** 2) / n
+        _check(est[:, col], want, f"line average L={L}")

@@ -311,3 +311,12 @@ def test_docstring_examples_run():
     result = doctest.testmod(mod, optionflags=doctest.ELLIPSIS)
     assert result.attempted > 10
     assert result.failed == 0
+
+
+def test_models_pickle():
+    import pickle
+
+    for m in MODELS.values():
+        again = pickle.loads(pickle.dumps(m))
+        assert type(again) is type(m) and again.params == m.params
+        assert again.tr(0.37) == m.tr(0.37)

@@ -22,9 +22,9 @@ Examples
 >>> f = fgf.synthesize((64, 64), hurst=-0.3, seed=1)
 >>> f.shape, f.dtype
 ((64, 64), dtype('float32'))
->>> tau, t = fgf.sample_optical_depth(n_rays=4, n_steps=8, t_max=2.0, hurst=-0.3, sw=0.3, seed=0)
->>> tau.shape, float(t[-1])
-((4, 9), 2.0)
+>>> tau = fgf.sample_optical_depth(n_rays=4, n_steps=8, t_max=2.0, hurst=-0.3, sw=0.3, seed=0)
+>>> tau.shape           # at t = np.linspace(0, 2.0, 9)
+(4, 9)
 """
 
 from __future__ import annotations
@@ -239,7 +239,7 @@ def sample_optical_depth(
     sw: float = 1.0,
     seed: int = 0,
     progress: Progress = True,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> np.ndarray:
     """Exact fluctuating optical depth along rays through white or pink noise.
 
     ``tau_u(t) = int_0^t sigma_u`` is a fractional Brownian motion with Hurst
@@ -262,19 +262,19 @@ def sample_optical_depth(
     Returns
     -------
     tau : numpy.ndarray, shape (n_rays, n_steps + 1)
-        ``tau[r, i]`` at ``t[i]``; ``tau[:, 0] = 0``.
-    t : numpy.ndarray, shape (n_steps + 1,)
-        ``t[i] = i * t_max / n_steps``.
+        ``tau[r, i]`` at ``t[i] = i * t_max / n_steps`` (that is
+        ``t = np.linspace(0, t_max, n_steps + 1)``); ``tau[:, 0] = 0``.
 
     Examples
     --------
-    >>> import fgf
-    >>> tau, t = fgf.sample_optical_depth(n_rays=2000, n_steps=16, t_max=4.0, hurst=-0.3, sw=0.3, seed=0)
+    >>> import fgf, numpy as np
+    >>> tau = fgf.sample_optical_depth(n_rays=2000, n_steps=16, t_max=4.0, hurst=-0.3, sw=0.3, seed=0)
+    >>> t = np.linspace(0, 4.0, 17)
     >>> line_avg = tau[:, -1] / t[-1]   # variance ~ S_p t^(2H)
     """
     return _run(
         _core.sample_optical_depth, progress, "optical depth", int(n_rays), int(n_steps), float(t_max), float(hurst), float(sw), int(seed)
-    )
+    )[0]
 
 
 def sample_kfbm_1d(
@@ -285,7 +285,7 @@ def sample_kfbm_1d(
     sw: float = 1.0,
     seed: int = 0,
     progress: Progress = True,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> np.ndarray:
     """Exact anchored 1D k-fBm by Cholesky factorisation of its covariance.
 
     Samples at ``x[i] = i * length / n_steps``; ``x[0] = 0`` is the anchor.
@@ -294,18 +294,18 @@ def sample_kfbm_1d(
     Returns
     -------
     values : numpy.ndarray, shape (n_samples, n_steps + 1)
-    x : numpy.ndarray, shape (n_steps + 1,)
+        At ``x = np.linspace(0, length, n_steps + 1)``; ``values[:, 0] = 0``.
 
     Examples
     --------
     >>> import fgf
-    >>> m, x = fgf.sample_kfbm_1d(n_samples=3, n_steps=10, length=1.0, hurst=1.5, seed=2)
+    >>> m = fgf.sample_kfbm_1d(n_samples=3, n_steps=10, length=1.0, hurst=1.5, seed=2)
     >>> m.shape, float(m[0, 0])
     ((3, 11), 0.0)
     """
     return _run(
         _core.sample_kfbm_1d, progress, "k-fBm", int(n_samples), int(n_steps), float(length), float(hurst), float(sw), int(seed)
-    )
+    )[0]
 
 
 def _array(field) -> np.ndarray:

@@ -221,6 +221,10 @@ class TransmittanceModel:
         """
         return self._eval("sample_medium", u)
 
+    def __reduce__(self):
+        # Pickle by constructor parameters (the native object is rebuilt).
+        return (_from_params, (self.params,))
+
     def __repr__(self) -> str:
         p = self.params
         kind = p.pop("kind")
@@ -230,6 +234,18 @@ class TransmittanceModel:
             p.pop("length")
         args = ", ".join(f"{k}={v!r}" for k, v in p.items())
         return f"{type(self).__name__}({args})"
+
+
+def _from_params(p: dict) -> TransmittanceModel:
+    """Rebuild a model from :attr:`TransmittanceModel.params` (for pickle)."""
+    kind = p["kind"]
+    if kind == "exponential":
+        return Exponential(p["sigma_t"])
+    if kind == "fgf":
+        return Fgf(p["sigma_t"], hurst=p["hurst"], sw=p["sw"], length=p["length"])
+    if kind == "davis":
+        return Davis(p["sigma_t"], alpha=p["alpha"])
+    return DavisWeinstein(p["sigma_t"], h=p["h"], c=p["c"])
 
 
 class Exponential(TransmittanceModel):

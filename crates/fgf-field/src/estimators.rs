@@ -50,7 +50,12 @@ fn lines(shape: &[usize], axis: usize) -> (Vec<usize>, usize, usize) {
 
 fn check_lag(max_lag: usize, n: usize) -> Result<(), ParamError> {
     if max_lag >= n {
-        return Err(ParamError::new("max_lag", max_lag, "must be shorter than the axis", format!("0 <= max_lag < {n}")));
+        return Err(ParamError::new(
+            "max_lag",
+            max_lag,
+            "must be shorter than the axis",
+            format!("0 <= max_lag < {n}"),
+        ));
     }
     Ok(())
 }
@@ -58,7 +63,13 @@ fn check_lag(max_lag: usize, n: usize) -> Result<(), ParamError> {
 /// Sums over pairs `(f(x), f(x+h))` along `axis`, lags `0..=max_lag`, with
 /// `pair(a, b)` the summand; returns the per-lag means (non-periodic: only
 /// pairs inside the grid).
-fn pair_means<T, F>(data: &[T], shape: &[usize], axis: usize, max_lag: usize, pair: F) -> Result<Vec<f64>, ParamError>
+fn pair_means<T, F>(
+    data: &[T],
+    shape: &[usize],
+    axis: usize,
+    max_lag: usize,
+    pair: F,
+) -> Result<Vec<f64>, ParamError>
 where
     T: Copy + Into<f64> + Sync,
     F: Fn(f64, f64) -> f64 + Sync,
@@ -70,7 +81,9 @@ where
         .par_iter()
         .map(|&s| {
             let line: Vec<f64> = (0..n).map(|i| data[s + i * stride].into()).collect();
-            (0..=max_lag).map(|h| (0..n - h).map(|i| pair(line[i], line[i + h])).sum::<f64>()).collect()
+            (0..=max_lag)
+                .map(|h| (0..n - h).map(|i| pair(line[i], line[i + h])).sum::<f64>())
+                .collect()
         })
         .collect();
     let mut sums = vec![0.0; max_lag + 1];
@@ -112,7 +125,10 @@ pub fn covariance_along_axis<T: Copy + Into<f64> + Sync>(
 
 fn mean<T: Copy + Into<f64> + Sync>(data: &[T]) -> f64 {
     // Fixed chunking, partial sums added in order: deterministic.
-    let parts: Vec<f64> = data.par_chunks(1 << 16).map(|c| c.iter().map(|&v| v.into()).sum::<f64>()).collect();
+    let parts: Vec<f64> = data
+        .par_chunks(1 << 16)
+        .map(|c| c.iter().map(|&v| v.into()).sum::<f64>())
+        .collect();
     parts.iter().sum::<f64>() / data.len() as f64
 }
 
@@ -141,7 +157,12 @@ pub fn radial_power_spectrum<T: Copy + Into<f64> + Sync>(
     check(shape, data.len(), None)?;
     ParamError::check_positive("spacing", spacing)?;
     if n_bins == 0 {
-        return Err(ParamError::new("n_bins", n_bins, "need at least one bin", "n_bins >= 1"));
+        return Err(ParamError::new(
+            "n_bins",
+            n_bins,
+            "need at least one bin",
+            "n_bins >= 1",
+        ));
     }
     let d = shape.len();
     let n_total = data.len();
@@ -164,7 +185,8 @@ pub fn radial_power_spectrum<T: Copy + Into<f64> + Sync>(
     let nmax = *shape.iter().max().unwrap() as f64;
     let k_lo = 2.0 * PI / (nmax * spacing);
     let k_hi = PI / spacing;
-    let (mut ksum, mut psum, mut count) = (vec![0.0; n_bins], vec![0.0; n_bins], vec![0usize; n_bins]);
+    let (mut ksum, mut psum, mut count) =
+        (vec![0.0; n_bins], vec![0.0; n_bins], vec![0usize; n_bins]);
     let norm = spacing.powi(d as i32) / n_total as f64;
     for (flat, v) in spec.iter().enumerate() {
         let mut rem = flat;
@@ -173,7 +195,11 @@ pub fn radial_power_spectrum<T: Copy + Into<f64> + Sync>(
             let n = shape[axis];
             let i = rem % n;
             rem /= n;
-            let m = if i <= n / 2 { i as f64 } else { i as f64 - n as f64 };
+            let m = if i <= n / 2 {
+                i as f64
+            } else {
+                i as f64 - n as f64
+            };
             k2 += (2.0 * PI * m / (n as f64 * spacing)).powi(2);
         }
         let k = k2.sqrt();
@@ -222,7 +248,12 @@ pub fn line_average_second_moment<T: Copy + Into<f64> + Sync>(
     let (starts, n, stride) = lines(shape, axis);
     for &l in lengths {
         if l == 0 || l > n {
-            return Err(ParamError::new("length", l, "segment must fit on the axis", format!("1 <= length <= {n}")));
+            return Err(ParamError::new(
+                "length",
+                l,
+                "segment must fit on the axis",
+                format!("1 <= length <= {n}"),
+            ));
         }
     }
     let per_line: Vec<Vec<f64>> = starts
@@ -233,7 +264,10 @@ pub fn line_average_second_moment<T: Copy + Into<f64> + Sync>(
                 .map(|&l| {
                     (0..n / l)
                         .map(|j| {
-                            let m = (0..l).map(|i| data[s + (j * l + i) * stride].into()).sum::<f64>() / l as f64;
+                            let m = (0..l)
+                                .map(|i| data[s + (j * l + i) * stride].into())
+                                .sum::<f64>()
+                                / l as f64;
                             m * m
                         })
                         .sum::<f64>()
@@ -259,7 +293,10 @@ mod tests {
         let data: Vec<f64> = (0..15).map(|i| (i % 5) as f64).collect();
         let g = variogram_along_axis(&data, &shape, 1, 2).unwrap();
         assert_eq!(g, vec![0.0, 0.5, 2.0]);
-        assert_eq!(variogram_along_axis(&data, &shape, 0, 2).unwrap(), vec![0.0; 3]);
+        assert_eq!(
+            variogram_along_axis(&data, &shape, 0, 2).unwrap(),
+            vec![0.0; 3]
+        );
         let c = covariance_along_axis(&data, &shape, 1, 0).unwrap();
         assert!((c[0] - 2.0).abs() < 1e-12, "{c:?}"); // variance of 0..4
         assert!(variogram_along_axis(&data, &shape, 2, 1).is_err());
@@ -272,17 +309,31 @@ mod tests {
         // equals the variance 1/2 (Parseval).
         let n = 64;
         let dx = 0.5;
-        let data: Vec<f64> = (0..n).map(|i| (2.0 * PI * 3.0 * i as f64 / n as f64).cos()).collect();
+        let data: Vec<f64> = (0..n)
+            .map(|i| (2.0 * PI * 3.0 * i as f64 / n as f64).cos())
+            .collect();
         let s = radial_power_spectrum(&data, &[n], dx, 40).unwrap();
-        let (ib, _) = s.power.iter().enumerate().fold((0, 0.0), |a, (i, &p)| if p > a.1 { (i, p) } else { a });
+        let (ib, _) = s
+            .power
+            .iter()
+            .enumerate()
+            .fold((0, 0.0), |a, (i, &p)| if p > a.1 { (i, p) } else { a });
         assert!((s.k[ib] - 2.0 * PI * 3.0 / (n as f64 * dx)).abs() < 1e-9);
-        let total: f64 = s.power.iter().zip(&s.count).map(|(p, c)| p * *c as f64).sum::<f64>() / (n as f64 * dx);
+        let total: f64 = s
+            .power
+            .iter()
+            .zip(&s.count)
+            .map(|(p, c)| p * *c as f64)
+            .sum::<f64>()
+            / (n as f64 * dx);
         assert!((total - 0.5).abs() < 1e-9, "{total}");
     }
 
     #[test]
     fn line_average_of_alternating_signs_vanishes() {
-        let data: Vec<f32> = (0..8).map(|i| if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let data: Vec<f32> = (0..8)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         let m = line_average_second_moment(&data, &[8], 0, &[1, 2, 3]).unwrap();
         assert_eq!(m[0], 1.0);
         assert_eq!(m[1], 0.0);

@@ -45,16 +45,28 @@ pub struct Samples1d {
 
 fn check_counts(n_paths: usize, paths_name: &str, n_steps: usize) -> Result<(), ParamError> {
     if n_paths == 0 {
-        return Err(ParamError::new(paths_name, n_paths, "need at least one path", format!("{paths_name} >= 1")));
+        return Err(ParamError::new(
+            paths_name,
+            n_paths,
+            "need at least one path",
+            format!("{paths_name} >= 1"),
+        ));
     }
     if n_steps == 0 {
-        return Err(ParamError::new("n_steps", n_steps, "need at least one step", "n_steps >= 1"));
+        return Err(ParamError::new(
+            "n_steps",
+            n_steps,
+            "need at least one step",
+            "n_steps >= 1",
+        ));
     }
     Ok(())
 }
 
 fn grid(n_steps: usize, t_max: f64) -> Vec<f64> {
-    (0..=n_steps).map(|i| t_max * i as f64 / n_steps as f64).collect()
+    (0..=n_steps)
+        .map(|i| t_max * i as f64 / n_steps as f64)
+        .collect()
 }
 
 /// Exact optical depth `τ_u(t_i)` of white (`H = -1/2`) or pink
@@ -75,15 +87,13 @@ pub fn sample_optical_depth(
     ParamError::check_positive("sw", sw)?;
     match Regime::from_hurst(hurst)? {
         Regime::White | Regime::Pink => {}
-        Regime::KFbm { .. } => {
-            return Err(ParamError::new(
-                "hurst",
-                hurst,
-                "the optical-depth sampler covers white and pink noise; use sample_kfbm_1d for k-fBm",
-                "-0.5 <= hurst < 0",
-            )
-            .into())
-        }
+        Regime::KFbm { .. } => return Err(ParamError::new(
+            "hurst",
+            hurst,
+            "the optical-depth sampler covers white and pink noise; use sample_kfbm_1d for k-fBm",
+            "-0.5 <= hurst < 0",
+        )
+        .into()),
     }
     let cols = n_steps + 1;
     let m = n_steps;
@@ -102,7 +112,8 @@ pub fn sample_optical_depth(
     let var = s_p(hurst, sw) * dt.powf(2.0 * h);
     let gamma = |j: usize| {
         let j = j as f64;
-        0.5 * var * ((j + 1.0).powf(2.0 * h) - 2.0 * j.powf(2.0 * h) + (j - 1.0).abs().powf(2.0 * h))
+        0.5 * var
+            * ((j + 1.0).powf(2.0 * h) - 2.0 * j.powf(2.0 * h) + (j - 1.0).abs().powf(2.0 * h))
     };
     // Circulant embedding c = [γ0..γm, γ(m-1)..γ1] of size 2m; its DFT gives
     // the eigenvalues, real since c is symmetric.
@@ -119,23 +130,37 @@ pub fn sample_optical_depth(
         return Err(ParamError::new(
             "hurst",
             hurst,
-            format!("circulant embedding not non-negative (eigenvalue {})", bad.re),
+            format!(
+                "circulant embedding not non-negative (eigenvalue {})",
+                bad.re
+            ),
             "-0.5 <= hurst < 0",
         )
         .into());
     }
-    let sqrt_lambda: Vec<f64> = c.iter().map(|v| (v.re.max(0.0) / big_m as f64).sqrt()).collect();
+    let sqrt_lambda: Vec<f64> = c
+        .iter()
+        .map(|v| (v.re.max(0.0) / big_m as f64).sqrt())
+        .collect();
 
     let mut values = vec![0.0f64; n_rays * cols];
     values.par_chunks_mut(2 * cols).enumerate().for_each_init(
-        || (vec![Complex::new(0.0, 0.0); big_m], vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()]),
+        || {
+            (
+                vec![Complex::new(0.0, 0.0); big_m],
+                vec![Complex::new(0.0, 0.0); fft.get_inplace_scratch_len()],
+            )
+        },
         |(buf, scr), (pair, out)| {
             if progress.cancelled() {
                 return;
             }
             let mut rng = stream(seed, Purpose::DaviesHarte, pair as u64);
             for (b, &s) in buf.iter_mut().zip(&sqrt_lambda) {
-                *b = Complex::new(rng.sample::<f64, _>(StandardNormal), rng.sample::<f64, _>(StandardNormal)) * s;
+                *b = Complex::new(
+                    rng.sample::<f64, _>(StandardNormal),
+                    rng.sample::<f64, _>(StandardNormal),
+                ) * s;
             }
             fft.process_with_scratch(buf, scr);
             // Real and imaginary parts are two independent fGn paths.
@@ -172,7 +197,9 @@ pub fn kfbm_covariance_1d(hurst: f64, sw: f64, x: f64, y: f64) -> f64 {
     let mut v = (x - y).abs().powf(a);
     for j in 0..k {
         let b = binom(a, j);
-        v -= b * ((-x).powi(j as i32) * y.powf(a - j as f64) + (-y).powi(j as i32) * x.powf(a - j as f64));
+        v -= b
+            * ((-x).powi(j as i32) * y.powf(a - j as f64)
+                + (-y).powi(j as i32) * x.powf(a - j as f64));
     }
     c_const(hurst, 1) * sw * v
 }
@@ -217,8 +244,14 @@ pub fn sample_kfbm_1d(
     }
     let n = n_steps;
     let cols = n + 1;
-    let bytes = (n_samples as u64).checked_mul(cols as u64).and_then(|v| v.checked_add((n * n) as u64)).and_then(|v| v.checked_mul(8));
-    check_memory(&format!("{n_samples} k-fBm paths of {n_steps} steps"), bytes)?;
+    let bytes = (n_samples as u64)
+        .checked_mul(cols as u64)
+        .and_then(|v| v.checked_add((n * n) as u64))
+        .and_then(|v| v.checked_mul(8));
+    check_memory(
+        &format!("{n_samples} k-fBm paths of {n_steps} steps"),
+        bytes,
+    )?;
     let x: Vec<f64> = (1..=n).map(|i| length * i as f64 / n as f64).collect();
 
     // Lower factor, row-major; column-by-column (Cholesky–Crout) with the
@@ -233,15 +266,18 @@ pub fn sample_kfbm_1d(
         let ljj = if d > 1e-13 * ajj { d.sqrt() } else { 0.0 };
         row_j[j] = ljj;
         let row_j: &[f64] = row_j;
-        below.par_chunks_mut(n).enumerate().for_each(|(off, row_i)| {
-            let i = j + 1 + off;
-            row_i[j] = if ljj > 0.0 {
-                let dot: f64 = row_i[..j].iter().zip(&row_j[..j]).map(|(a, b)| a * b).sum();
-                (kfbm_covariance_1d(hurst, sw, x[i], x[j]) - dot) / ljj
-            } else {
-                0.0
-            };
-        });
+        below
+            .par_chunks_mut(n)
+            .enumerate()
+            .for_each(|(off, row_i)| {
+                let i = j + 1 + off;
+                row_i[j] = if ljj > 0.0 {
+                    let dot: f64 = row_i[..j].iter().zip(&row_j[..j]).map(|(a, b)| a * b).sum();
+                    (kfbm_covariance_1d(hurst, sw, x[i], x[j]) - dot) / ljj
+                } else {
+                    0.0
+                };
+            });
         if progress.cancelled() {
             return Err(FieldError::Cancelled);
         }
@@ -258,7 +294,11 @@ pub fn sample_kfbm_1d(
                 *v = rng.sample(StandardNormal);
             }
             for i in 0..n {
-                out[i + 1] = l[i * n..i * n + i + 1].iter().zip(&z[..i + 1]).map(|(a, b)| a * b).sum();
+                out[i + 1] = l[i * n..i * n + i + 1]
+                    .iter()
+                    .zip(&z[..i + 1])
+                    .map(|(a, b)| a * b)
+                    .sum();
             }
             progress.inc(1);
         },
@@ -307,8 +347,12 @@ mod tests {
         let k = sample_kfbm_1d(3, 50, 1.5, 1.4, 1.0, 4, &NoProgress).unwrap();
         assert!(k.values.chunks(51).all(|r| r[0] == 0.0));
         for t in [1, 3] {
-            let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
-            let b = pool.install(|| sample_optical_depth(5, 37, 2.0, -0.3, 0.7, 4, &NoProgress).unwrap());
+            let pool = rayon::ThreadPoolBuilder::new()
+                .num_threads(t)
+                .build()
+                .unwrap();
+            let b = pool
+                .install(|| sample_optical_depth(5, 37, 2.0, -0.3, 0.7, 4, &NoProgress).unwrap());
             let c = pool.install(|| sample_kfbm_1d(3, 50, 1.5, 1.4, 1.0, 4, &NoProgress).unwrap());
             assert_eq!(a, b);
             assert_eq!(k, c);
@@ -317,9 +361,18 @@ mod tests {
 
     #[test]
     fn samplers_reject_the_other_regime() {
-        assert!(sample_optical_depth(1, 4, 1.0, 0.5, 1.0, 0, &NoProgress).unwrap_err().to_string().contains("sample_kfbm_1d"));
-        assert!(sample_kfbm_1d(1, 4, 1.0, -0.3, 1.0, 0, &NoProgress).unwrap_err().to_string().contains("sample_optical_depth"));
-        assert!(sample_kfbm_1d(1, 5000, 1.0, 0.3, 1.0, 0, &NoProgress).unwrap_err().to_string().contains("n_steps"));
+        assert!(sample_optical_depth(1, 4, 1.0, 0.5, 1.0, 0, &NoProgress)
+            .unwrap_err()
+            .to_string()
+            .contains("sample_kfbm_1d"));
+        assert!(sample_kfbm_1d(1, 4, 1.0, -0.3, 1.0, 0, &NoProgress)
+            .unwrap_err()
+            .to_string()
+            .contains("sample_optical_depth"));
+        assert!(sample_kfbm_1d(1, 5000, 1.0, 0.3, 1.0, 0, &NoProgress)
+            .unwrap_err()
+            .to_string()
+            .contains("n_steps"));
         assert!(sample_optical_depth(0, 4, 1.0, -0.2, 1.0, 0, &NoProgress).is_err());
         assert!(sample_optical_depth(1, 4, 1.0, -0.7, 1.0, 0, &NoProgress).is_err());
     }
@@ -336,16 +389,26 @@ mod tests {
         let s = sample_optical_depth(m, 256, 4.0, -0.3, 0.5, 1, &NoProgress).unwrap();
         for i in [1usize, 16, 128, 256] {
             let t = s.t[i];
-            let est = (0..m).map(|r| (s.values[r * 257 + i] / t).powi(2)).sum::<f64>() / m as f64;
+            let est = (0..m)
+                .map(|r| (s.values[r * 257 + i] / t).powi(2))
+                .sum::<f64>()
+                / m as f64;
             let want = fgf_core::stats::line_average_variance(-0.3, 0.5, t, None).unwrap();
-            assert!((est - want).abs() < z * want * (2.0 / m as f64).sqrt(), "t={t}: {est} vs {want}");
+            assert!(
+                (est - want).abs() < z * want * (2.0 / m as f64).sqrt(),
+                "t={t}: {est} vs {want}"
+            );
         }
         for h in [0.6, 1.5] {
             let k = sample_kfbm_1d(m, 128, 2.0, h, 1.3, 2, &NoProgress).unwrap();
             for i in [1usize, 32, 64, 128] {
                 let est = (0..m).map(|r| k.values[r * 129 + i].powi(2)).sum::<f64>() / m as f64;
                 let want = kfbm_point_variance(h, 1.3, k.t[i]);
-                assert!((est - want).abs() < z * want * (2.0 / m as f64).sqrt(), "H={h} x={}: {est} vs {want}", k.t[i]);
+                assert!(
+                    (est - want).abs() < z * want * (2.0 / m as f64).sqrt(),
+                    "H={h} x={}: {est} vs {want}",
+                    k.t[i]
+                );
             }
         }
     }

@@ -49,7 +49,10 @@ pub enum ExportError {
 impl Format {
     /// The format of `path` from its extension (case-insensitive).
     pub fn from_path(path: &Path) -> Result<Format, ExportError> {
-        let ext = path.extension().and_then(|e| e.to_str()).map(|e| e.to_ascii_lowercase());
+        let ext = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .map(|e| e.to_ascii_lowercase());
         match ext.as_deref() {
             Some("npy") => Ok(Format::Npy),
             Some("vol") => Ok(Format::Vol),
@@ -87,10 +90,20 @@ impl Default for Density {
 impl Density {
     fn validate(&self) -> Result<(), ParamError> {
         if !self.mean.is_finite() {
-            return Err(ParamError::new("mean", self.mean, "must be finite", "finite"));
+            return Err(ParamError::new(
+                "mean",
+                self.mean,
+                "must be finite",
+                "finite",
+            ));
         }
         if !self.scale.is_finite() {
-            return Err(ParamError::new("scale", self.scale, "must be finite", "finite"));
+            return Err(ParamError::new(
+                "scale",
+                self.scale,
+                "must be finite",
+                "finite",
+            ));
         }
         if let Some(c) = self.clamp_min {
             if !c.is_finite() {
@@ -98,10 +111,6 @@ impl Density {
             }
         }
         Ok(())
-    }
-
-    fn is_identity(&self) -> bool {
-        *self == Density::default()
     }
 
     #[inline]
@@ -176,19 +185,42 @@ pub struct ExportSummary {
 }
 
 /// Write `field` to `path` (format from the extension, see module docs).
-pub fn write(path: &Path, field: &Field, opts: &ExportOptions) -> Result<ExportSummary, ExportError> {
-    write_field(path, (&field.data).into(), &field.shape, field.spacing, opts)
+pub fn write(
+    path: &Path,
+    field: &Field,
+    opts: &ExportOptions,
+) -> Result<ExportSummary, ExportError> {
+    write_field(
+        path,
+        (&field.data).into(),
+        &field.shape,
+        field.spacing,
+        opts,
+    )
 }
 
 /// Write C-order `data` of `shape` with grid `spacing` to `path`.
-pub fn write_field(path: &Path, data: FieldView<'_>, shape: &[usize], spacing: f64, opts: &ExportOptions) -> Result<ExportSummary, ExportError> {
+pub fn write_field(
+    path: &Path,
+    data: FieldView<'_>,
+    shape: &[usize],
+    spacing: f64,
+    opts: &ExportOptions,
+) -> Result<ExportSummary, ExportError> {
     let format = Format::from_path(path)?;
     let unsupported = |msg: String| ExportError::Unsupported {
         path: path.to_path_buf(),
         msg,
     };
-    if shape.is_empty() || shape.len() > 3 || shape.iter().product::<usize>() != data.len() || data.len() == 0 {
-        return Err(unsupported(format!("shape {shape:?} does not describe {} values", data.len())));
+    if shape.is_empty()
+        || shape.len() > 3
+        || shape.iter().product::<usize>() != data.len()
+        || data.len() == 0
+    {
+        return Err(unsupported(format!(
+            "shape {shape:?} does not describe {} values",
+            data.len()
+        )));
     }
     ParamError::check_positive("spacing", spacing)?;
     opts.density.validate()?;
@@ -199,9 +231,14 @@ pub fn write_field(path: &Path, data: FieldView<'_>, shape: &[usize], spacing: f
             if format == Format::Png { "PNG" } else { "EXR" }
         )));
     }
-    let mapped: Vec<f64> = (0..data.len()).map(|i| opts.density.map(data.get(i))).collect();
+    let mapped: Vec<f64> = (0..data.len())
+        .map(|i| opts.density.map(data.get(i)))
+        .collect();
     if let Some(i) = mapped.iter().position(|v| !v.is_finite()) {
-        return Err(unsupported(format!("value #{i} is not finite ({})", mapped[i])));
+        return Err(unsupported(format!(
+            "value #{i} is not finite ({})",
+            mapped[i]
+        )));
     }
     let summary = ExportSummary {
         format,
@@ -212,12 +249,12 @@ pub fn write_field(path: &Path, data: FieldView<'_>, shape: &[usize], spacing: f
     let as_f32 = || mapped.iter().map(|&v| v as f32).collect::<Vec<f32>>();
     match format {
         Format::Npy => {
-            // Keep the field's precision; skip the round trip through the
-            // mapping when it is the identity so f64 data stays bit-exact.
+            // Keep the field's precision. The identity mapping 0 + 1·f is
+            // exact, and f32 -> f64 -> f32 round-trips, so unmapped data is
+            // written bit for bit.
             let f64_out = matches!(data, FieldView::F64(_));
             write_npy(path, shape, f64_out, |w| {
-                for i in 0..data.len() {
-                    let v = if opts.density.is_identity() { data.get(i) } else { mapped[i] };
+                for &v in &mapped {
                     if f64_out {
                         w.write_all(&v.to_le_bytes())?;
                     } else {
@@ -234,7 +271,14 @@ pub fn write_field(path: &Path, data: FieldView<'_>, shape: &[usize], spacing: f
             let grid = fgf_io::vol::VolGrid {
                 shape: [nx, ny, nz],
                 channels: 1,
-                bbox: [0.0, 0.0, 0.0, (nx as f64 * spacing) as f32, (ny as f64 * spacing) as f32, (nz as f64 * spacing) as f32],
+                bbox: [
+                    0.0,
+                    0.0,
+                    0.0,
+                    (nx as f64 * spacing) as f32,
+                    (ny as f64 * spacing) as f32,
+                    (nz as f64 * spacing) as f32,
+                ],
                 data: as_f32(),
             };
             fgf_io::vol::write_vol(path, &grid)?;
@@ -289,8 +333,16 @@ fn write_npy<F>(path: &Path, shape: &[usize], f64_out: bool, body: F) -> Result<
 where
     F: Fn(&mut std::io::BufWriter<&std::fs::File>) -> std::io::Result<()>,
 {
-    let dims = shape.iter().map(|n| n.to_string()).collect::<Vec<_>>().join(", ");
-    let shape_str = if shape.len() == 1 { format!("({dims},)") } else { format!("({dims})") };
+    let dims = shape
+        .iter()
+        .map(|n| n.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    let shape_str = if shape.len() == 1 {
+        format!("({dims},)")
+    } else {
+        format!("({dims})")
+    };
     let mut header = format!(
         "{{'descr': '{}', 'fortran_order': False, 'shape': {shape_str}, }}",
         if f64_out { "<f8" } else { "<f4" }
@@ -299,8 +351,10 @@ where
     header.push_str(&" ".repeat(total.div_ceil(64) * 64 - total));
     header.push('\n');
     fgf_io::atomic_write(path, |w| {
-        w.write_all(b"\x93NUMPY\x01\x00").map_err(|e| e.to_string())?;
-        w.write_all(&(header.len() as u16).to_le_bytes()).map_err(|e| e.to_string())?;
+        w.write_all(b"\x93NUMPY\x01\x00")
+            .map_err(|e| e.to_string())?;
+        w.write_all(&(header.len() as u16).to_le_bytes())
+            .map_err(|e| e.to_string())?;
         w.write_all(header.as_bytes()).map_err(|e| e.to_string())?;
         body(w).map_err(|e| e.to_string())
     })
@@ -312,9 +366,17 @@ mod tests {
 
     #[test]
     fn format_from_extension() {
-        assert_eq!(Format::from_path(Path::new("a/b.VOL")).unwrap(), Format::Vol);
-        let e = Format::from_path(Path::new("f.tiff")).unwrap_err().to_string();
-        assert!(e.contains("f.tiff") && e.contains(".tiff") && e.contains(".npy"), "{e}");
+        assert_eq!(
+            Format::from_path(Path::new("a/b.VOL")).unwrap(),
+            Format::Vol
+        );
+        let e = Format::from_path(Path::new("f.tiff"))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("f.tiff") && e.contains(".tiff") && e.contains(".npy"),
+            "{e}"
+        );
         assert!(Format::from_path(Path::new("f")).is_err());
     }
 
@@ -345,7 +407,14 @@ mod tests {
     fn three_d_png_is_refused_and_leaves_no_file() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("f.png");
-        let e = write_field(&p, FieldView::F32(&[0.0; 8]), &[2, 2, 2], 1.0, &ExportOptions::default()).unwrap_err();
+        let e = write_field(
+            &p,
+            FieldView::F32(&[0.0; 8]),
+            &[2, 2, 2],
+            1.0,
+            &ExportOptions::default(),
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("2D"), "{e}");
         assert!(!p.exists());
     }
@@ -354,13 +423,25 @@ mod tests {
     fn npy_header_is_aligned() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("f.npy");
-        write_field(&p, FieldView::F64(&[1.0, 2.0, 3.0]), &[3], 1.0, &ExportOptions::default()).unwrap();
+        write_field(
+            &p,
+            FieldView::F64(&[1.0, 2.0, 3.0]),
+            &[3],
+            1.0,
+            &ExportOptions::default(),
+        )
+        .unwrap();
         let b = std::fs::read(&p).unwrap();
         let hl = u16::from_le_bytes([b[8], b[9]]) as usize;
         assert_eq!((10 + hl) % 64, 0);
         assert_eq!(b.len(), 10 + hl + 24);
-        assert!(std::str::from_utf8(&b[10..10 + hl]).unwrap().contains("'shape': (3,)"));
-        assert_eq!(f64::from_le_bytes(b[10 + hl + 8..10 + hl + 16].try_into().unwrap()), 2.0);
+        assert!(std::str::from_utf8(&b[10..10 + hl])
+            .unwrap()
+            .contains("'shape': (3,)"));
+        assert_eq!(
+            f64::from_le_bytes(b[10 + hl + 8..10 + hl + 16].try_into().unwrap()),
+            2.0
+        );
     }
 
     #[test]

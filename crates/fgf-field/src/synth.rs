@@ -349,7 +349,12 @@ impl Plan {
             if padding > 1.0 {
                 let want = (out[ax] as f64 * padding).ceil();
                 if want > 1e12 {
-                    return Err(ParamError::new("padding", padding, "padded grid too large", "1 <= padding, padded axis < 1e12"));
+                    return Err(ParamError::new(
+                        "padding",
+                        padding,
+                        "padded grid too large",
+                        "1 <= padding, padded axis < 1e12",
+                    ));
                 }
                 pad[ax] = next_smooth(want as usize);
             }
@@ -382,7 +387,11 @@ impl Plan {
             for az in 0..kfbm {
                 for ay in 0..kfbm {
                     for ax in 0..kfbm {
-                        if az + ay + ax < kfbm && (az == 0 || used(0)) && (ay == 0 || used(1)) && (ax == 0 || used(2)) {
+                        if az + ay + ax < kfbm
+                            && (az == 0 || used(0))
+                            && (ay == 0 || used(1))
+                            && (ax == 0 || used(2))
+                        {
                             terms.push([az, ay, ax]);
                         }
                     }
@@ -410,8 +419,14 @@ impl Plan {
     /// Bytes the synthesis allocates at its peak (buffers, not scratch).
     pub(crate) fn bytes(&self, elem: usize) -> Option<u64> {
         let [n0, n1, n2] = self.pad;
-        let spec = (n0 as u64).checked_mul(n1 as u64)?.checked_mul(2 * (n2 as u64 / 2 + 1))?;
-        let out: u64 = if self.in_place() { 0 } else { self.out.iter().map(|&n| n as u64).product() };
+        let spec = (n0 as u64)
+            .checked_mul(n1 as u64)?
+            .checked_mul(2 * (n2 as u64 / 2 + 1))?;
+        let out: u64 = if self.in_place() {
+            0
+        } else {
+            self.out.iter().map(|&n| n as u64).product()
+        };
         spec.checked_add(out)?.checked_mul(elem as u64)
     }
 
@@ -420,12 +435,20 @@ impl Plan {
         let [n0, n1, n2] = self.pad;
         let nblk = (n2 / 2 + 1).div_ceil(B);
         let y_pass = |nz: usize| if n1 > 1 { (nz * nblk) as u64 } else { 0 };
-        (n0 * n1) as u64 + y_pass(n0) + n1 as u64 + y_pass(self.out[0]) + (self.out[0] * self.out[1]) as u64
+        (n0 * n1) as u64
+            + y_pass(n0)
+            + n1 as u64
+            + y_pass(self.out[0])
+            + (self.out[0] * self.out[1]) as u64
     }
 
     /// Signed wavenumber of index `i` on an axis of `n` samples.
     fn wavenumber(&self, i: usize, n: usize) -> f64 {
-        let m = if i <= n / 2 { i as f64 } else { i as f64 - n as f64 };
+        let m = if i <= n / 2 {
+            i as f64
+        } else {
+            i as f64 - n as f64
+        };
         2.0 * PI * m / (n as f64 * self.dx)
     }
 
@@ -435,7 +458,7 @@ impl Plan {
 }
 
 /// The spectral filter `amp |k|^(-s)`, 0 at k = 0 (and at Nyquist for k-fBm).
-/// On grids whose used axes all have the same length, `|k|²` is
+/// On 3D grids whose axes all have the same length, `|k|²` is
 /// `(2π/(n dx))²` times an integer, and the power comes from a table.
 struct Filter {
     keep: [Vec<bool>; 3],
@@ -463,13 +486,22 @@ impl Filter {
             }
         }
         let used: Vec<usize> = plan.pad[3 - plan.d..].to_vec();
-        let lut = if used.iter().all(|&n| n == used[0]) && plan.s != 0.0 {
-            let n = used[0];
-            let qmax = plan.d * (n / 2) * (n / 2);
+        let n = used[0];
+        let qmax = plan.d * (n / 2) * (n / 2);
+        // The table has d·(n/2)² entries: it only pays off when it is much
+        // smaller than the number of stored modes (3D grids, not 1D/2D).
+        let modes = lens.iter().product::<usize>();
+        let lut = if used.iter().all(|&m| m == n) && plan.s != 0.0 && 4 * (qmax + 1) <= modes {
             let unit = (2.0 * PI / (n as f64 * plan.dx)).powi(2);
             Some(
                 (0..=qmax)
-                    .map(|q| if q == 0 { 0.0 } else { plan.amp * (unit * q as f64).powf(-plan.s / 2.0) })
+                    .map(|q| {
+                        if q == 0 {
+                            0.0
+                        } else {
+                            plan.amp * (unit * q as f64).powf(-plan.s / 2.0)
+                        }
+                    })
                     .collect(),
             )
         } else {
@@ -523,7 +555,11 @@ pub fn discrete_spectral_variance(params: &SynthParams) -> Result<f64, ParamErro
             let mut acc = 0.0;
             for iy in 0..n1 {
                 for ix in 0..n2 / 2 + 1 {
-                    let w = if ix == 0 || (n2 % 2 == 0 && ix == n2 / 2) { 1.0 } else { 2.0 };
+                    let w = if ix == 0 || (n2 % 2 == 0 && ix == n2 / 2) {
+                        1.0
+                    } else {
+                        2.0
+                    };
                     acc += w * filter.at(iz, iy, ix).powi(2);
                 }
             }
@@ -571,7 +607,11 @@ fn elem_size(p: Precision) -> usize {
 pub fn synthesize(params: &SynthParams, progress: &dyn Progress) -> Result<Field, FieldError> {
     let plan = Plan::new(params)?;
     check_memory(
-        &format!("a field of shape {:?} (periodic domain {:?})", params.shape, &plan.pad[3 - plan.d..]),
+        &format!(
+            "a field of shape {:?} (periodic domain {:?})",
+            params.shape,
+            &plan.pad[3 - plan.d..]
+        ),
         plan.bytes(elem_size(params.precision)),
     )?;
     let data = match params.precision {
@@ -620,7 +660,14 @@ fn cancel_check(progress: &dyn Progress) -> Result<(), FieldError> {
 
 /// FFT along y of one contiguous z-slab (`n1` rows of `nxh` complex), in
 /// blocks of `B` columns gathered into `tmp`.
-fn y_fft_slab<T: Real>(slab: &mut [Complex<T>], n1: usize, nxh: usize, fft: &Arc<dyn Fft<T>>, tmp: &mut [Complex<T>], scr: &mut [Complex<T>]) {
+fn y_fft_slab<T: Real>(
+    slab: &mut [Complex<T>],
+    n1: usize,
+    nxh: usize,
+    fft: &Arc<dyn Fft<T>>,
+    tmp: &mut [Complex<T>],
+    scr: &mut [Complex<T>],
+) {
     for x0 in (0..nxh).step_by(B) {
         let bw = B.min(nxh - x0);
         for y in 0..n1 {
@@ -644,12 +691,23 @@ fn fuse_slabs(n0: usize) -> bool {
 }
 
 /// FFT along y of every (z, x-block) of slabs `0..nz`, in place.
-fn y_pass<T: Real>(spec: SyncPtr<Complex<T>>, dims: [usize; 3], nz: usize, fft: &Arc<dyn Fft<T>>, progress: &dyn Progress) {
+fn y_pass<T: Real>(
+    spec: SyncPtr<Complex<T>>,
+    dims: [usize; 3],
+    nz: usize,
+    fft: &Arc<dyn Fft<T>>,
+    progress: &dyn Progress,
+) {
     let [_, n1, n2] = dims;
     let nxh = n2 / 2 + 1;
     let nblk = nxh.div_ceil(B);
     (0..nz * nblk).into_par_iter().for_each_init(
-        || (vec![Complex::<T>::zero(); B * n1], vec![Complex::<T>::zero(); fft.get_inplace_scratch_len()]),
+        || {
+            (
+                vec![Complex::<T>::zero(); B * n1],
+                vec![Complex::<T>::zero(); fft.get_inplace_scratch_len()],
+            )
+        },
         |(tmp, scr), job| {
             if progress.cancelled() {
                 return;
@@ -659,14 +717,17 @@ fn y_pass<T: Real>(spec: SyncPtr<Complex<T>>, dims: [usize; 3], nz: usize, fft: 
             let base = spec.get();
             for y in 0..n1 {
                 // SAFETY: job (z, block) owns elements [z][*][x0..x0+bw].
-                let src = unsafe { std::slice::from_raw_parts(base.add((z * n1 + y) * nxh + x0), bw) };
+                let src =
+                    unsafe { std::slice::from_raw_parts(base.add((z * n1 + y) * nxh + x0), bw) };
                 for (j, v) in src.iter().enumerate() {
                     tmp[j * n1 + y] = *v;
                 }
             }
             fft.process_with_scratch(&mut tmp[..bw * n1], scr);
             for y in 0..n1 {
-                let dst = unsafe { std::slice::from_raw_parts_mut(base.add((z * n1 + y) * nxh + x0), bw) };
+                let dst = unsafe {
+                    std::slice::from_raw_parts_mut(base.add((z * n1 + y) * nxh + x0), bw)
+                };
                 for (j, v) in dst.iter_mut().enumerate() {
                     *v = tmp[j * n1 + y];
                 }
@@ -703,34 +764,34 @@ impl Taylor {
         }
     }
 
-    /// The factors of mode `(*, iy, ix)` that do not depend on `iz`:
-    /// `c · e^{i(ky y_a + kx x_a)}` and, per term, `ky^ay kx^ax`. `c = 2`
-    /// for modes whose conjugate is not stored in the half spectrum.
-    fn line(&self, iy: usize, ix: usize, mono_yx: &mut [f64]) -> Complex<f64> {
-        for (t, m) in self.terms.iter().zip(mono_yx.iter_mut()) {
-            *m = self.k[1][iy].powi(t[1] as i32) * self.k[2][ix].powi(t[2] as i32);
-        }
-        let c = if ix == 0 { 1.0 } else { 2.0 };
-        self.phase[1][iy] * self.phase[2][ix] * c
+    /// Highest derivative order along z plus one (the number of z-line sums).
+    fn kz_orders(&self) -> usize {
+        self.terms
+            .iter()
+            .map(|t| t[0] as usize + 1)
+            .max()
+            .unwrap_or(0)
     }
 
-    /// Add mode `(iz, iy, ix)` with coefficient `f` to the derivative sums
-    /// `∂^a field(anchor) = Σ c · Re(F (ik)^a e^{ik·anchor})`; `line_phase`
-    /// and `mono_yx` come from [`Taylor::line`].
-    #[inline]
-    fn add(&self, acc: &mut [f64], f: Complex<f64>, iz: usize, line_phase: Complex<f64>, mono_yx: &[f64]) {
-        let g = f * self.phase[0][iz] * line_phase;
-        let kz = self.k[0][iz];
-        for ((t, a), m) in self.terms.iter().zip(acc.iter_mut()).zip(mono_yx) {
-            let mono = m * if t[0] == 0 { 1.0 } else { kz.powi(t[0] as i32) };
+    /// Add the z-line `(*, iy, ix)` to the derivative sums
+    /// `∂^a field(anchor) = Σ_modes c · Re(F (ik)^a e^{ik·anchor})`, given
+    /// `line[p] = Σ_z F e^{i kz z_a} kz^p`. `c = 2` for modes whose conjugate
+    /// is not stored in the half spectrum. Splitting the sum per line keeps
+    /// the per-mode work to one complex multiply-add per z-order.
+    fn add_line(&self, acc: &mut [f64], line: &[Complex<f64>], iy: usize, ix: usize) {
+        let c = if ix == 0 { 1.0 } else { 2.0 };
+        let lp = self.phase[1][iy] * self.phase[2][ix] * c;
+        for (t, a) in self.terms.iter().zip(acc.iter_mut()) {
+            let g = line[t[0] as usize]
+                * lp
+                * (self.k[1][iy].powi(t[1] as i32) * self.k[2][ix].powi(t[2] as i32));
             // Re(i^n g): the power of i from (ik)^a.
-            let re = match (t[0] + t[1] + t[2]) % 4 {
+            *a += match (t[0] + t[1] + t[2]) % 4 {
                 0 => g.re,
                 1 => -g.im,
                 2 => -g.re,
                 _ => g.im,
             };
-            *a += mono * re;
         }
     }
 }
@@ -801,7 +862,8 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                 }
                 for (y, row) in slab.chunks_mut(row_len).enumerate() {
                     noise_row(inp, z * n1 + y);
-                    r2c.process_with_scratch(inp, as_complex_mut(row), rscr).expect("FFT lengths match");
+                    r2c.process_with_scratch(inp, as_complex_mut(row), rscr)
+                        .expect("FFT lengths match");
                 }
                 y_fft_slab(as_complex_mut(slab), n1, nxh, &fy, tmp, yscr);
                 progress.inc((n1 + nblk) as u64);
@@ -816,13 +878,20 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                     return;
                 }
                 noise_row(inp, r);
-                r2c.process_with_scratch(inp, as_complex_mut(row), scr).expect("FFT lengths match");
+                r2c.process_with_scratch(inp, as_complex_mut(row), scr)
+                    .expect("FFT lengths match");
                 progress.inc(1);
             },
         );
         cancel_check(progress)?;
         if n1 > 1 {
-            y_pass(SyncPtr(buf.as_mut_ptr() as *mut Complex<T>), plan.pad, n0, &fy, progress);
+            y_pass(
+                SyncPtr(buf.as_mut_ptr() as *mut Complex<T>),
+                plan.pad,
+                n0,
+                &fy,
+                progress,
+            );
             cancel_check(progress)?;
         }
     }
@@ -832,14 +901,20 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
     let filter = Filter::new(plan);
     let taylor = plan.anchor.map(|a| Taylor::new(plan, a));
     let n_terms = plan.terms.len();
+    let kz_orders = taylor.as_ref().map_or(0, |t| t.kz_orders());
     let sums: Vec<Vec<f64>> = (0..n1)
         .into_par_iter()
         .map_init(
             || {
-                let scr = fz.get_inplace_scratch_len().max(iz.get_inplace_scratch_len());
-                (vec![Complex::<T>::zero(); B * n0], vec![Complex::<T>::zero(); scr], vec![0.0f64; n_terms])
+                let scr = fz
+                    .get_inplace_scratch_len()
+                    .max(iz.get_inplace_scratch_len());
+                (
+                    vec![Complex::<T>::zero(); B * n0],
+                    vec![Complex::<T>::zero(); scr],
+                )
             },
-            |(tmp, scr, mono_yx), y| {
+            |(tmp, scr), y| {
                 let mut acc = vec![0.0f64; n_terms];
                 if progress.cancelled() {
                     return acc;
@@ -850,7 +925,9 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                     let bw = B.min(nxh - x0);
                     for z in 0..n0 {
                         // SAFETY: job y owns elements [*][y][*].
-                        let src = unsafe { std::slice::from_raw_parts(base.add((z * n1 + y) * nxh + x0), bw) };
+                        let src = unsafe {
+                            std::slice::from_raw_parts(base.add((z * n1 + y) * nxh + x0), bw)
+                        };
                         for (j, v) in src.iter().enumerate() {
                             tmp[j * n0 + z] = *v;
                         }
@@ -860,20 +937,33 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                     }
                     for j in 0..bw {
                         let ix = x0 + j;
-                        let line_phase = taylor.as_ref().map(|t| t.line(y, ix, mono_yx));
-                        for z in 0..n0 {
-                            let v = &mut tmp[j * n0 + z];
+                        let line = &mut tmp[j * n0..(j + 1) * n0];
+                        for (z, v) in line.iter_mut().enumerate() {
                             *v = *v * T::of(filter.at(z, y, ix));
-                            if let (Some(t), Some(lp)) = (&taylor, line_phase) {
-                                t.add(&mut acc, Complex::new(v.re.as_f64(), v.im.as_f64()), z, lp, mono_yx);
+                        }
+                        if let Some(t) = &taylor {
+                            let mut sums = [Complex::new(0.0f64, 0.0); 3];
+                            for (z, v) in line.iter().enumerate() {
+                                let f = Complex::new(v.re.as_f64(), v.im.as_f64()) * t.phase[0][z];
+                                let kz = t.k[0][z];
+                                sums[0] += f;
+                                if kz_orders > 1 {
+                                    sums[1] += f * kz;
+                                }
+                                if kz_orders > 2 {
+                                    sums[2] += f * (kz * kz);
+                                }
                             }
+                            t.add_line(&mut acc, &sums, y, ix);
                         }
                     }
                     if n0 > 1 {
                         iz.process_with_scratch(&mut tmp[..bw * n0], scr);
                     }
                     for z in 0..n0 {
-                        let dst = unsafe { std::slice::from_raw_parts_mut(base.add((z * n1 + y) * nxh + x0), bw) };
+                        let dst = unsafe {
+                            std::slice::from_raw_parts_mut(base.add((z * n1 + y) * nxh + x0), bw)
+                        };
                         for (j, v) in dst.iter_mut().enumerate() {
                             *v = tmp[j * n0 + z];
                         }
@@ -909,14 +999,20 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
         y_pass(spec, plan.pad, o0, &iy, progress);
         cancel_check(progress)?;
     }
-    let finish_row = |c: &mut [Complex<T>], o: &mut [T], scr: &mut [Complex<T>], dst: &mut [T], z: usize, y: usize| {
+    let finish_row = |c: &mut [Complex<T>],
+                      o: &mut [T],
+                      scr: &mut [Complex<T>],
+                      dst: &mut [T],
+                      z: usize,
+                      y: usize| {
         // The imaginary parts of the x = 0 and Nyquist bins are zero up to
         // rounding (Hermitian symmetry); realfft wants them exactly zero.
         c[0].im = T::zero();
         if n2 % 2 == 0 {
             c[nxh - 1].im = T::zero();
         }
-        c2r.process_with_scratch(c, o, scr).expect("FFT lengths match");
+        c2r.process_with_scratch(c, o, scr)
+            .expect("FFT lengths match");
         match &poly {
             Some(p) => {
                 for (x, v) in dst.iter_mut().enumerate() {
@@ -926,11 +1022,23 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
             None => dst.copy_from_slice(&o[..dst.len()]),
         }
     };
-    let y_init = || (vec![Complex::<T>::zero(); B * n1], vec![Complex::<T>::zero(); iy.get_inplace_scratch_len()]);
+    let y_init = || {
+        (
+            vec![Complex::<T>::zero(); B * n1],
+            vec![Complex::<T>::zero(); iy.get_inplace_scratch_len()],
+        )
+    };
     if plan.in_place() {
         if fused {
             buf.par_chunks_mut(n1 * row_len).enumerate().for_each_init(
-                || (c2r.make_output_vec(), c2r.make_scratch_vec(), vec![Complex::<T>::zero(); nxh], y_init()),
+                || {
+                    (
+                        c2r.make_output_vec(),
+                        c2r.make_scratch_vec(),
+                        vec![Complex::<T>::zero(); nxh],
+                        y_init(),
+                    )
+                },
                 |(o, scr, c, (tmp, yscr)), (z, slab)| {
                     if progress.cancelled() {
                         return;
@@ -945,7 +1053,13 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
             );
         } else {
             buf.par_chunks_mut(row_len).enumerate().for_each_init(
-                || (c2r.make_output_vec(), c2r.make_scratch_vec(), vec![Complex::<T>::zero(); nxh]),
+                || {
+                    (
+                        c2r.make_output_vec(),
+                        c2r.make_scratch_vec(),
+                        vec![Complex::<T>::zero(); nxh],
+                    )
+                },
                 |(o, scr, c), (r, row)| {
                     if progress.cancelled() {
                         return;
@@ -968,20 +1082,23 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
     } else {
         let mut out: Vec<T> = vec![T::zero(); o0 * o1 * o2];
         if fused {
-            buf.par_chunks_mut(n1 * row_len).zip(out.par_chunks_mut(o1 * o2)).enumerate().for_each_init(
-                || (c2r.make_output_vec(), c2r.make_scratch_vec(), y_init()),
-                |(o, scr, (tmp, yscr)), (z, (slab, oslab))| {
-                    if progress.cancelled() {
-                        return;
-                    }
-                    let slab = as_complex_mut(slab);
-                    y_fft_slab(slab, n1, nxh, &iy, tmp, yscr);
-                    for (y, orow) in oslab.chunks_mut(o2).enumerate() {
-                        finish_row(&mut slab[y * nxh..(y + 1) * nxh], o, scr, orow, z, y);
-                    }
-                    progress.inc((nblk + o1) as u64);
-                },
-            );
+            buf.par_chunks_mut(n1 * row_len)
+                .zip(out.par_chunks_mut(o1 * o2))
+                .enumerate()
+                .for_each_init(
+                    || (c2r.make_output_vec(), c2r.make_scratch_vec(), y_init()),
+                    |(o, scr, (tmp, yscr)), (z, (slab, oslab))| {
+                        if progress.cancelled() {
+                            return;
+                        }
+                        let slab = as_complex_mut(slab);
+                        y_fft_slab(slab, n1, nxh, &iy, tmp, yscr);
+                        for (y, orow) in oslab.chunks_mut(o2).enumerate() {
+                            finish_row(&mut slab[y * nxh..(y + 1) * nxh], o, scr, orow, z, y);
+                        }
+                        progress.inc((nblk + o1) as u64);
+                    },
+                );
         } else {
             out.par_chunks_mut(o2).enumerate().for_each_init(
                 || (c2r.make_output_vec(), c2r.make_scratch_vec()),
@@ -991,7 +1108,9 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                     }
                     let (z, y) = (r / o1, r % o1);
                     // SAFETY: output row (z, y) is the only reader of padded row (z, y).
-                    let c = unsafe { std::slice::from_raw_parts_mut(spec.get().add((z * n1 + y) * nxh), nxh) };
+                    let c = unsafe {
+                        std::slice::from_raw_parts_mut(spec.get().add((z * n1 + y) * nxh), nxh)
+                    };
                     finish_row(c, o, scr, orow, z, y);
                     progress.inc(1);
                 },
@@ -1025,7 +1144,11 @@ mod tests {
             let mut planner = FftPlanner::<f64>::new();
             for ax in 0..3 {
                 let n = dims[ax];
-                let fft = if inverse { planner.plan_fft_inverse(n) } else { planner.plan_fft_forward(n) };
+                let fft = if inverse {
+                    planner.plan_fft_inverse(n)
+                } else {
+                    planner.plan_fft_forward(n)
+                };
                 let stride: usize = dims[ax + 1..].iter().product();
                 let outer: usize = dims[..ax].iter().product();
                 for o in 0..outer {
@@ -1044,9 +1167,19 @@ mod tests {
         for iz in 0..n0 {
             for iy in 0..n1 {
                 for ix in 0..n2 {
-                    let k2: f64 = [(iz, n0), (iy, n1), (ix, n2)].iter().map(|&(i, n)| plan.wavenumber(i, n).powi(2)).sum();
-                    let nyq = plan.zero_nyquist && [(iz, n0), (iy, n1), (ix, n2)].iter().any(|&(i, n)| Plan::is_nyquist(i, n));
-                    let f = if k2 == 0.0 || nyq { 0.0 } else { plan.amp * k2.powf(-plan.s / 2.0) };
+                    let k2: f64 = [(iz, n0), (iy, n1), (ix, n2)]
+                        .iter()
+                        .map(|&(i, n)| plan.wavenumber(i, n).powi(2))
+                        .sum();
+                    let nyq = plan.zero_nyquist
+                        && [(iz, n0), (iy, n1), (ix, n2)]
+                            .iter()
+                            .any(|&(i, n)| Plan::is_nyquist(i, n));
+                    let f = if k2 == 0.0 || nyq {
+                        0.0
+                    } else {
+                        plan.amp * k2.powf(-plan.s / 2.0)
+                    };
                     a[(iz * n1 + iy) * n2 + ix] *= f;
                 }
             }
@@ -1093,7 +1226,10 @@ mod tests {
             let want = reference(&p);
             let scale = want.iter().map(|v| v * v).sum::<f64>().sqrt() / (want.len() as f64).sqrt();
             for (g, w) in got.iter().zip(&want) {
-                assert!((g - w).abs() <= 1e-12 * scale.max(1e-300) * 10.0, "{shape:?} H={h}: {g} vs {w}");
+                assert!(
+                    (g - w).abs() <= 1e-12 * scale.max(1e-300) * 10.0,
+                    "{shape:?} H={h}: {g} vs {w}"
+                );
             }
         }
     }
@@ -1101,14 +1237,22 @@ mod tests {
     #[test]
     fn bit_identical_for_any_thread_count() {
         // n0 = 10: slab-fused with 1 thread, not with 3 (see fuse_slabs).
-        for (shape, h) in [(vec![12usize, 10, 33], -0.2), (vec![17, 20], 1.3), (vec![8, 9, 10], 2.5), (vec![10, 9, 8], -0.7)] {
+        for (shape, h) in [
+            (vec![12usize, 10, 33], -0.2),
+            (vec![17, 20], 1.3),
+            (vec![8, 9, 10], 2.5),
+            (vec![10, 9, 8], -0.7),
+        ] {
             let mut p = SynthParams::new(&shape, h);
             p.seed = 5;
             p.anchor = Anchor::Center;
             let runs: Vec<FieldData> = [1, 2, 3]
                 .iter()
                 .map(|&t| {
-                    let pool = rayon::ThreadPoolBuilder::new().num_threads(t).build().unwrap();
+                    let pool = rayon::ThreadPoolBuilder::new()
+                        .num_threads(t)
+                        .build()
+                        .unwrap();
                     pool.install(|| synthesize(&p, &NoProgress).unwrap().data)
                 })
                 .collect();
@@ -1125,7 +1269,11 @@ mod tests {
         p.precision = Precision::F64;
         let b = f64_data(&synthesize(&p, &NoProgress).unwrap());
         let rms = (b.iter().map(|v| v * v).sum::<f64>() / b.len() as f64).sqrt();
-        let err = a.iter().zip(&b).map(|(x, y)| (x - y).abs()).fold(0.0, f64::max);
+        let err = a
+            .iter()
+            .zip(&b)
+            .map(|(x, y)| (x - y).abs())
+            .fold(0.0, f64::max);
         // f32 round-off of a few FFT passes: ~1e-7 relative per pass.
         assert!(err < 1e-5 * rms, "err {err} rms {rms}");
     }
@@ -1149,12 +1297,19 @@ mod tests {
             for (ax, &i) in a.iter().enumerate() {
                 idx = idx * shape[ax] + i;
             }
-            let rms = (f64_data(&g).iter().map(|v| v * v).sum::<f64>() / g.data.len() as f64).sqrt();
-            assert!(f.data.get(idx).abs() < 1e-10 * rms, "{shape:?}: value at anchor {}", f.data.get(idx));
+            let rms =
+                (f64_data(&g).iter().map(|v| v * v).sum::<f64>() / g.data.len() as f64).sqrt();
+            assert!(
+                f.data.get(idx).abs() < 1e-10 * rms,
+                "{shape:?}: value at anchor {}",
+                f.data.get(idx)
+            );
             // g - f is the Taylor polynomial of degree k-1: its k-th finite
             // differences along the last axis vanish.
             let k = h.ceil() as usize;
-            let diff: Vec<f64> = (0..f.data.len()).map(|i| g.data.get(i) - f.data.get(i)).collect();
+            let diff: Vec<f64> = (0..f.data.len())
+                .map(|i| g.data.get(i) - f.data.get(i))
+                .collect();
             let nx = *shape.last().unwrap();
             for row in diff.chunks(nx) {
                 let mut d = row.to_vec();

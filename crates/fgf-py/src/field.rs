@@ -45,7 +45,9 @@ fn run<R: Send>(
     progress: Option<&Bound<'_, PyAny>>,
     job: impl FnOnce(&dyn fgf_core::Progress) -> R + Send,
 ) -> PyResult<R> {
-    let quiet = progress.map_or(true, |p| p.is_none() || p.extract::<bool>().is_ok_and(|b| !b));
+    let quiet = progress.map_or(true, |p| {
+        p.is_none() || p.extract::<bool>().is_ok_and(|b| !b)
+    });
     if quiet && size < SMALL_JOB {
         return Ok(py.detach(|| job(&fgf_core::NoProgress)));
     }
@@ -57,7 +59,9 @@ fn run<R: Send>(
 }
 
 fn parse_anchor(anchor: Option<&Bound<'_, PyAny>>) -> PyResult<Anchor> {
-    let Some(a) = anchor else { return Ok(Anchor::None) };
+    let Some(a) = anchor else {
+        return Ok(Anchor::None);
+    };
     if a.is_none() {
         return Ok(Anchor::None);
     }
@@ -74,7 +78,9 @@ fn parse_anchor(anchor: Option<&Bound<'_, PyAny>>) -> PyResult<Anchor> {
     if let Ok(idx) = a.extract::<Vec<usize>>() {
         return Ok(Anchor::Index(idx));
     }
-    Err(PyTypeError::new_err("anchor must be \"corner\", \"center\", \"none\", None or a sequence of ints"))
+    Err(PyTypeError::new_err(
+        "anchor must be \"corner\", \"center\", \"none\", None or a sequence of ints",
+    ))
 }
 
 fn parse_precision(dtype: &str) -> PyResult<Precision> {
@@ -126,12 +132,24 @@ fn synthesize<'py>(
 ) -> PyResult<Bound<'py, PyAny>> {
     let p = params(shape, hurst, sw, spacing, seed, anchor, padding, dtype)?;
     let total = fgf_field::work_units(&p).map_err(param_err)?;
-    let size = fgf_field::padded_shape(&p).map_err(param_err)?.iter().product();
-    let f = run(py, size, total, "synthesize", progress, |c| fgf_field::synthesize(&p, c))?.map_err(field_err)?;
+    let size = fgf_field::padded_shape(&p)
+        .map_err(param_err)?
+        .iter()
+        .product();
+    let f = run(py, size, total, "synthesize", progress, |c| {
+        fgf_field::synthesize(&p, c)
+    })?
+    .map_err(field_err)?;
     let dims = IxDyn(&f.shape);
     let arr = match f.data {
-        FieldData::F32(v) => Array::from_shape_vec(dims, v).expect("shape matches").into_pyarray(py).into_any(),
-        FieldData::F64(v) => Array::from_shape_vec(dims, v).expect("shape matches").into_pyarray(py).into_any(),
+        FieldData::F32(v) => Array::from_shape_vec(dims, v)
+            .expect("shape matches")
+            .into_pyarray(py)
+            .into_any(),
+        FieldData::F64(v) => Array::from_shape_vec(dims, v)
+            .expect("shape matches")
+            .into_pyarray(py)
+            .into_any(),
     };
     Ok(arr)
 }
@@ -155,10 +173,16 @@ fn synthesis_info(
     ))
 }
 
-fn samples_to_numpy(py: Python<'_>, s: fgf_field::Samples1d) -> (Bound<'_, PyAny>, Bound<'_, PyAny>) {
+fn samples_to_numpy(
+    py: Python<'_>,
+    s: fgf_field::Samples1d,
+) -> (Bound<'_, PyAny>, Bound<'_, PyAny>) {
     let cols = s.t.len();
     let values = Array::from_shape_vec(IxDyn(&[s.n_paths, cols]), s.values).expect("shape matches");
-    (values.into_pyarray(py).into_any(), s.t.into_pyarray(py).into_any())
+    (
+        values.into_pyarray(py).into_any(),
+        s.t.into_pyarray(py).into_any(),
+    )
 }
 
 #[pyfunction]
@@ -175,9 +199,14 @@ fn sample_optical_depth<'py>(
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     let size = n_rays.saturating_mul(n_steps.saturating_add(1));
-    let s = run(py, size, n_rays.div_ceil(2) as u64, "optical depth", progress, |c| {
-        fgf_field::sample_optical_depth(n_rays, n_steps, t_max, hurst, sw, seed, c)
-    })?;
+    let s = run(
+        py,
+        size,
+        n_rays.div_ceil(2) as u64,
+        "optical depth",
+        progress,
+        |c| fgf_field::sample_optical_depth(n_rays, n_steps, t_max, hurst, sw, seed, c),
+    )?;
     Ok(samples_to_numpy(py, s.map_err(field_err)?))
 }
 
@@ -195,7 +224,9 @@ fn sample_kfbm_1d<'py>(
     progress: Option<&Bound<'py, PyAny>>,
 ) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
     // Cholesky is O(n^3): count its cost, not only the output size.
-    let size = n_samples.saturating_mul(n_steps.saturating_add(1)).saturating_add(n_steps.saturating_pow(3) / 64);
+    let size = n_samples
+        .saturating_mul(n_steps.saturating_add(1))
+        .saturating_add(n_steps.saturating_pow(3) / 64);
     let s = run(py, size, n_samples as u64, "k-fBm", progress, |c| {
         fgf_field::sample_kfbm_1d(n_samples, n_steps, length, hurst, sw, seed, c)
     })?;
@@ -221,7 +252,9 @@ impl<'py> Data<'py> {
         if let Ok(x) = a.extract::<PyReadonlyArrayDyn<'py, f32>>() {
             return Ok(Data::F32(x));
         }
-        Err(PyTypeError::new_err("field must be a float32 or float64 numpy array"))
+        Err(PyTypeError::new_err(
+            "field must be a float32 or float64 numpy array",
+        ))
     }
     fn shape(&self) -> Vec<usize> {
         match self {
@@ -230,7 +263,8 @@ impl<'py> Data<'py> {
         }
     }
     fn view(&self) -> PyResult<FieldView<'_>> {
-        let err = |_| PyValueError::new_err("field must be C-contiguous (use np.ascontiguousarray)");
+        let err =
+            |_| PyValueError::new_err("field must be C-contiguous (use np.ascontiguousarray)");
         Ok(match self {
             Data::F32(x) => FieldView::F32(x.as_slice().map_err(err)?),
             Data::F64(x) => FieldView::F64(x.as_slice().map_err(err)?),
@@ -248,21 +282,39 @@ macro_rules! with_slice {
 }
 
 #[pyfunction]
-fn variogram(py: Python<'_>, field: &Bound<'_, PyAny>, axis: usize, max_lag: usize) -> PyResult<Vec<f64>> {
+fn variogram(
+    py: Python<'_>,
+    field: &Bound<'_, PyAny>,
+    axis: usize,
+    max_lag: usize,
+) -> PyResult<Vec<f64>> {
     let d = Data::new(field)?;
     let shape = d.shape();
     let v = d.view()?;
-    py.detach(|| with_slice!(v, |s| fgf_field::estimators::variogram_along_axis(s, &shape, axis, max_lag)))
-        .map_err(param_err)
+    py.detach(|| {
+        with_slice!(v, |s| fgf_field::estimators::variogram_along_axis(
+            s, &shape, axis, max_lag
+        ))
+    })
+    .map_err(param_err)
 }
 
 #[pyfunction]
-fn covariance(py: Python<'_>, field: &Bound<'_, PyAny>, axis: usize, max_lag: usize) -> PyResult<Vec<f64>> {
+fn covariance(
+    py: Python<'_>,
+    field: &Bound<'_, PyAny>,
+    axis: usize,
+    max_lag: usize,
+) -> PyResult<Vec<f64>> {
     let d = Data::new(field)?;
     let shape = d.shape();
     let v = d.view()?;
-    py.detach(|| with_slice!(v, |s| fgf_field::estimators::covariance_along_axis(s, &shape, axis, max_lag)))
-        .map_err(param_err)
+    py.detach(|| {
+        with_slice!(v, |s| fgf_field::estimators::covariance_along_axis(
+            s, &shape, axis, max_lag
+        ))
+    })
+    .map_err(param_err)
 }
 
 #[pyfunction]
@@ -276,18 +328,31 @@ fn radial_power_spectrum(
     let shape = d.shape();
     let v = d.view()?;
     let r = py
-        .detach(|| with_slice!(v, |s| fgf_field::estimators::radial_power_spectrum(s, &shape, spacing, n_bins)))
+        .detach(|| {
+            with_slice!(v, |s| fgf_field::estimators::radial_power_spectrum(
+                s, &shape, spacing, n_bins
+            ))
+        })
         .map_err(param_err)?;
     Ok((r.k, r.power, r.count))
 }
 
 #[pyfunction]
-fn line_average_second_moment(py: Python<'_>, field: &Bound<'_, PyAny>, axis: usize, lengths: Vec<usize>) -> PyResult<Vec<f64>> {
+fn line_average_second_moment(
+    py: Python<'_>,
+    field: &Bound<'_, PyAny>,
+    axis: usize,
+    lengths: Vec<usize>,
+) -> PyResult<Vec<f64>> {
     let d = Data::new(field)?;
     let shape = d.shape();
     let v = d.view()?;
-    py.detach(|| with_slice!(v, |s| fgf_field::estimators::line_average_second_moment(s, &shape, axis, &lengths)))
-        .map_err(param_err)
+    py.detach(|| {
+        with_slice!(v, |s| fgf_field::estimators::line_average_second_moment(
+            s, &shape, axis, &lengths
+        ))
+    })
+    .map_err(param_err)
 }
 
 /// Write a field; returns a dict `{format, min, max, n_negative}`.
@@ -308,7 +373,11 @@ fn write_field<'py>(
     let shape = d.shape();
     let v = d.view()?;
     let opts = ExportOptions {
-        density: Density { mean, scale, clamp_min },
+        density: Density {
+            mean,
+            scale,
+            clamp_min,
+        },
         png_percentiles,
     };
     let s = py

@@ -270,12 +270,10 @@ fn line_average_variance<'py>(
     length: Option<f64>,
 ) -> PyResult<Bound<'py, PyArray1<f64>>> {
     let ts = t.as_slice()?;
-    // Validate every argument once (and each t), then evaluate.
-    for &tv in ts.iter().take(1).chain(ts.iter().filter(|&&v| !(v > 0.0))) {
-        stats::line_average_variance(hurst, sw, tv, length).map_err(param_err)?;
-    }
-    if ts.is_empty() {
-        stats::line_average_variance(hurst, sw, 1.0, length).map_err(param_err)?;
+    // Validate the parameters once, then the first invalid t (if any).
+    stats::line_average_variance(hurst, sw, 1.0, length).map_err(param_err)?;
+    if let Some(&bad) = ts.iter().find(|v| v.is_nan() || **v <= 0.0) {
+        stats::line_average_variance(hurst, sw, bad, length).map_err(param_err)?;
     }
     map_array(py, &t, |tv| {
         stats::line_average_variance(hurst, sw, tv, length).unwrap_or(f64::NAN)

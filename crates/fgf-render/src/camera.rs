@@ -126,10 +126,18 @@ mod tests {
         assert!((r.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
         let (r, _) = c.generate_ray(200.0, 50.0);
         // fov 90 along x: 45° to the right.
-        assert!((r.d - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-5, "{:?}", r.d);
+        assert!(
+            (r.d - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-5,
+            "{:?}",
+            r.d
+        );
         let (r, _) = c.generate_ray(100.0, 0.0);
         // Aspect 2: tan(half fov y) = 0.5, toward +y at the top.
-        assert!((r.d - Vec3::new(0.0, 0.5, -1.0).normalize()).length() < 1e-5, "{:?}", r.d);
+        assert!(
+            (r.d - Vec3::new(0.0, 0.5, -1.0).normalize()).length() < 1e-5,
+            "{:?}",
+            r.d
+        );
         // fov along y on the same film: the top edge is at 45°.
         let c = Camera::new(&sensor(FovAxis::Y, 200, 100)).unwrap();
         let (r, _) = c.generate_ray(100.0, 0.0);

@@ -146,8 +146,10 @@ mod tests {
     fn filter_sampling_reproduces_the_filter() {
         let tent = |x: f32| (1.0 - x.abs()).max(0.0);
         let gauss = |x: f32| gaussian(x, 0.5, 2.0);
-        let cases: [(FilterDesc, &dyn Fn(f32) -> f32); 2] =
-            [(FilterDesc::Tent { radius: 1.0 }, &tent), (FilterDesc::Gaussian { stddev: 0.5 }, &gauss)];
+        let cases: [(FilterDesc, &dyn Fn(f32) -> f32); 2] = [
+            (FilterDesc::Tent { radius: 1.0 }, &tent),
+            (FilterDesc::Gaussian { stddev: 0.5 }, &gauss),
+        ];
         for (desc, f) in cases {
             let filter = Filter::new(&desc);
             let r = match desc {
@@ -162,7 +164,8 @@ mod tests {
                 // Stratified variates: the histogram error is O(1/n).
                 let u = (i as f32 + 0.5) / n as f32;
                 let (x, w) = filter.sample_1d(u);
-                let b = (((x + r) / (2.0 * r)) * bins as f32).clamp(0.0, bins as f32 - 1.0) as usize;
+                let b =
+                    (((x + r) / (2.0 * r)) * bins as f32).clamp(0.0, bins as f32 - 1.0) as usize;
                 hist[b] += w as f64 / n as f64;
             }
             // Expected mass per bin by the midpoint rule on a fine grid.
@@ -175,7 +178,10 @@ mod tests {
                     .map(|i| f(-r + (i as f32 + 0.5) * h) as f64)
                     .sum::<f64>()
                     / total;
-                assert!((got - expect).abs() < 2e-3, "{desc:?} bin {b}: {got} vs {expect}");
+                assert!(
+                    (got - expect).abs() < 2e-3,
+                    "{desc:?} bin {b}: {got} vs {expect}"
+                );
             }
         }
     }

@@ -15,7 +15,7 @@
 //!   delta surface (or directly from the camera) count fully.
 //! * Shadow rays pass through `null` boundaries and media (transmittance
 //!   estimates); any other surface blocks them.
-//! * Russian roulette from depth `rr_depth` on: survival probability
+//! * Russian roulette once the depth exceeds `rr_depth`: survival probability
 //!   `min(max(throughput)·η², 0.95)`.
 //! * RGB throughput; media sample free flights with spectral MIS (see
 //!   [`crate::medium`]).
@@ -197,14 +197,22 @@ impl World {
         };
         let mut tr = Spectrum::ONE;
         loop {
-            let t_end = match target {
-                Some(q) => (q - o).length() - shadow_epsilon(q),
-                None => f32::INFINITY,
+            // Aim at the target from the offset origin: keeping `wi` from the
+            // un-offset point would reach the light's surface earlier by
+            // offset/cos, more than the shadow epsilon at grazing angles, and
+            // the light would shadow itself.
+            let (d, t_end) = match target {
+                Some(q) => {
+                    let v = q - o;
+                    let len = v.length();
+                    (v / len, len - shadow_epsilon(q))
+                }
+                None => (wi, f32::INFINITY),
             };
             if !(t_end > 0.0) {
                 return tr;
             }
-            let ray = Ray { o, d: wi };
+            let ray = Ray { o, d };
             let hit = self.geom.intersect(&ray, t_end);
             let t_seg = hit.map_or(t_end, |h| h.t);
             if let Some(m) = medium {
@@ -463,7 +471,8 @@ impl World {
         eta: f32,
         s: &mut Sampler,
     ) -> bool {
-        if depth < self.rr_depth {
+        // Like Mitsuba: roulette once the depth exceeds rr_depth.
+        if depth <= self.rr_depth {
             return true;
         }
         // η² undoes the radiance scaling at refractions so that a path

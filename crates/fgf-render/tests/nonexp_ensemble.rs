@@ -52,8 +52,8 @@ fn grid_covers_the_medium_box_with_cubic_voxels() {
     assert_eq!(m.shape, [8, 4, 16]);
     assert!((m.spacing - 2.0 / 16.0).abs() < 1e-12);
     let expected = [-0.5, 0.5, -1.0, 0.5, 1.0, 1.0];
-    for k in 0..6 {
-        assert!((m.bbox[k] - expected[k]).abs() < 1e-9, "{:?}", m.bbox);
+    for (got, want) in m.bbox.iter().zip(expected) {
+        assert!((got - want).abs() < 1e-9, "{:?}", m.bbox);
     }
     assert_eq!(out.realizations_done, 2);
     assert!(out.stderr.iter().all(|v| v.is_finite()));

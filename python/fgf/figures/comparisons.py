@@ -1,4 +1,4 @@
-"""Figure group 5, comparisons (``theory.md`` §4, §5.5), on the scene of
+"""Figure group 5a, comparisons (``theory.md`` §4, §5.5), on the scene of
 group 4 (:mod:`fgf.figures.renders`).
 
 * **Kernels**: the same FGF medium (pink H = -0.1 and 2-fBm H = 1.2) under
@@ -16,7 +16,8 @@ The third comparison of §5.5 (model vs explicit realizations) is the group
 Each row shows the two images and their difference (same exposure; the
 difference in a diverging colour map). The number reported is the mean
 relative error ``Σ|a - b| / Σ|b|`` over all pixels and channels (b the
-reference: the reciprocal kernel, the FGF medium).
+reference: the reciprocal kernel, the FGF medium); for the kernels also the
+level Monte Carlo noise alone would give (:func:`noise_level`).
 """
 
 from __future__ import annotations
@@ -34,6 +35,8 @@ def steps(quick: bool) -> int:
 
 
 def mean_relative_error(a: np.ndarray, b: np.ndarray) -> float:
+    """Σ|a - b| / Σ|b| over all pixels and channels: normalising by the
+    image total, not per pixel, keeps dark pixels from dominating."""
     den = float(np.abs(b).sum())
     return float(np.abs(a - b).sum() / den) if den > 0 else 0.0
 

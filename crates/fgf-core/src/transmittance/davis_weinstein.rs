@@ -16,10 +16,11 @@
 //! where it is `σ_eff` (Tungsten's `sigmaBar` returns 1 there, which is not
 //! `T_sm(0)`).
 //!
-//! Pink-noise sampling has no closed form: [`DavisWeinstein::sample_surface`]
-//! and [`DavisWeinstein::sample_medium`] run a safeguarded Newton iteration
-//! in `ln t` with tolerance [`SURFACE_TOL`](super::SURFACE_TOL) / [`MEDIUM_TOL`](super::MEDIUM_TOL) and cap
-//! [`SAMPLE_MAX_ITER`](super::SAMPLE_MAX_ITER), bisection as fallback.
+//! For `1/2 < h < 1` sampling has no closed form: [`DavisWeinstein::sample_surface`]
+//! and [`DavisWeinstein::sample_medium`] run the safeguarded iteration on
+//! `ln t` described in [`Fgf`](super::Fgf) (tolerances
+//! [`SURFACE_TOL`](super::SURFACE_TOL) and [`MEDIUM_TOL`](super::MEDIUM_TOL),
+//! cap [`SAMPLE_MAX_ITER`](super::SAMPLE_MAX_ITER), bisection fallback).
 //!
 //! | parameter | units | valid range | default |
 //! |---|---|---|---|

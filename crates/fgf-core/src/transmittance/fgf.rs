@@ -17,12 +17,15 @@
 //! | pink | `(-0.5, 0)` | `S_p t^(2H)` | Davis–Weinstein, `h = H+1`, `c = S_p^(1/(2H+2))/σ_m` |
 //! | k-fBm | `(k-1, k)` | `S_kf L^(2H)` | Davis, `α = σ_m²/(S_kf L^(2H))` |
 //!
-//! Sampling: closed-form inverses for white noise and k-fBm; for pink noise
-//! a safeguarded Newton iteration on `ln t` (tolerance
-//! [`SURFACE_TOL`](super::SURFACE_TOL) / [`MEDIUM_TOL`](super::MEDIUM_TOL) on the step, at most
-//! [`SAMPLE_MAX_ITER`](super::SAMPLE_MAX_ITER) iterations, bisection
-//! fallback inside a guaranteed bracket). For white noise `p(0) = σ̄ = σ_eff`,
-//! not `σ_m`.
+//! Sampling: closed-form inverses for white noise and k-fBm. Pink noise has
+//! none: a safeguarded Newton-type iteration on `ln t` solves `Tr(t) = 1-u`
+//! (Householder's 4th-order steps, tolerance [`SURFACE_TOL`](super::SURFACE_TOL),
+//! started from a polynomial fit of the root made in the constructor: one
+//! evaluation per sample for typical parameters) and `T_ms(t) = 1-u` (Halley,
+//! [`MEDIUM_TOL`](super::MEDIUM_TOL)); at most
+//! [`SAMPLE_MAX_ITER`](super::SAMPLE_MAX_ITER) iterations, bisection as the
+//! fallback inside the bracket. For white noise `p(0) = σ̄ = σ_eff`, not
+//! `σ_m`.
 //!
 //! | parameter | units | valid range | default |
 //! |---|---|---|---|

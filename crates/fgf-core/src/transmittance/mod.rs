@@ -242,6 +242,149 @@ pub(crate) fn householder_step(d: [f64; 4]) -> f64 {
     newton
 }
 
+/// Terms of the pink surface equation at `ln x`: `(ln g, a, b, x b')` with
+/// `g = L/x`, `L = ln(1+x)`, `a = x / ((1+x) L)` and `b = x a'(x)`; see
+/// `GammaCore::sample_surface`.
+#[inline]
+fn pink_terms(ln_x: f64) -> (f64, f64, f64, f64) {
+    if ln_x < -18.0 {
+        // x < 1.5e-8: ln g = -x/2, a = 1 - x/2, b = -x/2, x b' = -x/2,
+        // each to O(x²) < 1e-16.
+        let x = ln_x.exp();
+        (-0.5 * x, 1.0 - 0.5 * x, -0.5 * x, -0.5 * x)
+    } else if ln_x > 700.0 {
+        // 1 + x overflows soon: L = ln x to 1e-304, a = 1/L, g = 0,
+        // and x b' = O(1/L²) is negligible against φ'.
+        let a = 1.0 / ln_x;
+        (ln_x.ln() - ln_x, a, -a * a, 0.0)
+    } else {
+        let x = ln_x.exp();
+        let l = x.ln_1p();
+        // Two divisions only: a = x / ((1+x) L), b = x a'(x) =
+        // (x L - x²) / ((1+x)² L²) = a (L - x) / ((1+x) L), and
+        // x b'(x) = x (N' - b D') / D by the quotient rule with
+        // N = x L - x², D = (1+x)² L², so x/D = a / ((1+x) L).
+        let inv_1px = 1.0 / (1.0 + x);
+        let inv_l = 1.0 / l;
+        let a = x * inv_1px * inv_l;
+        let r = a * inv_1px * inv_l;
+        let b = r * (l - x);
+        let dn = l + x * inv_1px - 2.0 * x;
+        let dden = 2.0 * (1.0 + x) * l * (l + 1.0);
+        (l.ln() - ln_x, a, b, r * (dn - b * dden))
+    }
+}
+
+/// Number of Chebyshev coefficients of [`StartGuess`] (its `eval` is written
+/// out for exactly 14).
+const GUESS_N: usize = 14;
+
+/// Starting point of the pink surface sampler: a Chebyshev interpolant of
+/// `D(z) = s* - s_lo`, the distance in `ln t` from the exponential guess
+/// `s_lo = ln(y/σ)` to the root, as a function of `z = ln x(e^s_lo)`. It
+/// depends on `e` only, and is fitted at construction on the window of `z`
+/// that `u ∈ [1e-3, 1 - 1e-3]` reaches, `z_c + [-8, 3]` with
+/// `z_c = ln k - e ln σ` (14 nodes; the error is ≲ 1e-3 for `e ≲ 0.9`).
+/// With it most samples need a single evaluation: the first step is then
+/// below [`SURFACE_TOL`]. Outside the window, the sampler starts at `s_lo`.
+/// It only moves the start: the safeguarded iteration decides the result.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct StartGuess {
+    mid: f64,
+    inv_half: f64,
+    /// Power-basis coefficients in `ξ = (z - mid) / half ∈ [-1, 1]`.
+    p: [f64; GUESS_N],
+}
+
+impl StartGuess {
+    fn new(e: f64, z_c: f64) -> Option<Self> {
+        if !(e > 0.0 && e < 1.0 && z_c.is_finite()) {
+            return None;
+        }
+        let (za, zb) = (z_c - 8.0, z_c + 3.0);
+        let mid = 0.5 * (za + zb);
+        let half = 0.5 * (zb - za);
+        let n = GUESS_N as f64;
+        let mut d = [0.0; GUESS_N];
+        for (j, dj) in d.iter_mut().enumerate() {
+            let z = mid + half * (std::f64::consts::PI * (j as f64 + 0.5) / n).cos();
+            // φ(D) = D + ln g(x_lo e^(e D)): φ(0) = ln g(x_lo) ≤ 0, φ' ≥ 1-e.
+            let phi = |dd: f64| -> [f64; 4] {
+                let (ln_g, a, b, xdb) = pink_terms(z + e * dd);
+                [dd + ln_g, (1.0 - e) + e * a, e * e * b, e * e * e * xdb]
+            };
+            let hi = -phi(0.0)[0] / (1.0 - e);
+            *dj = if hi > 0.0 {
+                solve_increasing(phi, 0.0, 0.0, hi, 1e-10)
+            } else {
+                0.0
+            };
+            if !dj.is_finite() {
+                return None;
+            }
+        }
+        let mut c = [0.0; GUESS_N];
+        for (k, ck) in c.iter_mut().enumerate() {
+            let mut sum = 0.0;
+            for (j, dj) in d.iter().enumerate() {
+                sum += dj * (std::f64::consts::PI * k as f64 * (j as f64 + 0.5) / n).cos();
+            }
+            *ck = 2.0 * sum / n;
+        }
+        c[0] *= 0.5;
+        // Convert Σ c_k T_k(ξ) to the power basis, so that `eval` can use
+        // Estrin's scheme (depth log2 N instead of Clenshaw's chain of N
+        // dependent steps). Degree 13 on [-1, 1] loses at most ~2^13 ε
+        // relative, irrelevant for a starting point.
+        let mut p = [0.0; GUESS_N];
+        let mut t_prev = [0.0; GUESS_N];
+        let mut t_cur = [0.0; GUESS_N];
+        t_prev[0] = 1.0; // T_0
+        t_cur[1] = 1.0; // T_1
+        p[0] = c[0];
+        for i in 0..GUESS_N {
+            p[i] += c[1] * t_cur[i];
+        }
+        for ck in c.iter().skip(2) {
+            // T_{k} = 2 ξ T_{k-1} - T_{k-2}.
+            let mut t_next = [0.0; GUESS_N];
+            for i in 0..GUESS_N {
+                let shifted = if i > 0 { 2.0 * t_cur[i - 1] } else { 0.0 };
+                t_next[i] = shifted - t_prev[i];
+            }
+            for i in 0..GUESS_N {
+                p[i] += ck * t_next[i];
+            }
+            t_prev = t_cur;
+            t_cur = t_next;
+        }
+        Some(StartGuess {
+            mid,
+            inv_half: 1.0 / half,
+            p,
+        })
+    }
+
+    /// `D(z)` by Estrin's scheme, or `None` outside the window.
+    #[inline]
+    fn eval(&self, z: f64) -> Option<f64> {
+        let xi = (z - self.mid) * self.inv_half;
+        if !(xi.abs() <= 1.0) {
+            return None;
+        }
+        let p = &self.p;
+        let x2 = xi * xi;
+        let x4 = x2 * x2;
+        let x8 = x4 * x4;
+        let q = |i: usize| p[i] + p[i + 1] * xi;
+        let r0 = q(0) + q(2) * x2;
+        let r1 = q(4) + q(6) * x2;
+        let r2 = q(8) + q(10) * x2;
+        let r3 = q(12);
+        Some((r0 + r1 * x4) + (r2 + r3 * x4) * x8)
+    }
+}
+
 /// The shared gamma-closure core `Tr = exp(-σ t g(k t^e))`, see the module
 /// docs. `sigma_bar = T_sm(0) = σ q(x(0))`: `σ` for `e > 0`, `σ g(k)` for
 /// `e = 0`.
@@ -253,18 +396,21 @@ pub(crate) struct GammaCore {
     pub sigma_bar: f64,
     ln_sigma: f64,
     ln_k: f64,
+    guess: Option<StartGuess>,
 }
 
 impl GammaCore {
     pub fn new(sigma: f64, k: f64, e: f64) -> Self {
         let sigma_bar = if e == 0.0 { sigma * g(k) } else { sigma };
+        let (ln_sigma, ln_k) = (sigma.ln(), k.ln());
         GammaCore {
             sigma,
             k,
             e,
             sigma_bar,
-            ln_sigma: sigma.ln(),
-            ln_k: k.ln(),
+            ln_sigma,
+            ln_k,
+            guess: StartGuess::new(e, ln_k - e * ln_sigma),
         }
     }
 
@@ -396,7 +542,8 @@ impl GammaCore {
         }
         // Pink: φ(s) = ln σ + s + ln g(x) - ln y with s = ln t,
         // x = k e^(e s), ln g = ln L - ln x, L = ln(1+x), dx/ds = e x.
-        // With a = x / ((1+x) L) = 1 / ((1+x) g) and b = x a'(x):
+        // With a = x / ((1+x) L) = 1 / ((1+x) g) and b = x a'(x)
+        // (`pink_terms`):
         //   φ'   = (1-e) + e a ∈ [1-e, 1]     (increasing),
         //   φ''  = e² b,  b = -a² (1 - g) ≤ 0  (concave),
         //   φ''' = e³ x b'(x).
@@ -405,36 +552,16 @@ impl GammaCore {
         let e = self.e;
         let c0 = self.ln_sigma - ln_y;
         let phi = |s: f64| -> [f64; 4] {
-            let ln_x = self.ln_k + e * s;
-            let (ln_g, a, b, xdb) = if ln_x < -18.0 {
-                // x < 1.5e-8: ln g = -x/2, a = 1 - x/2, b = -x/2, x b' = -x/2,
-                // each to O(x²) < 1e-16.
-                let x = ln_x.exp();
-                (-0.5 * x, 1.0 - 0.5 * x, -0.5 * x, -0.5 * x)
-            } else if ln_x > 700.0 {
-                // 1 + x overflows soon: L = ln x to 1e-304, a = 1/L, g = 0,
-                // and x b' = O(1/L²) is negligible against φ'.
-                let a = 1.0 / ln_x;
-                (ln_x.ln() - ln_x, a, -a * a, 0.0)
-            } else {
-                let x = ln_x.exp();
-                let l = x.ln_1p();
-                // Two divisions only: a = x / ((1+x) L), b = x a'(x) =
-                // (x L - x²) / ((1+x)² L²) = a (L - x) / ((1+x) L), and
-                // x b'(x) = x (N' - b D') / D by the quotient rule with
-                // N = x L - x², D = (1+x)² L², so x/D = a / ((1+x) L).
-                let inv_1px = 1.0 / (1.0 + x);
-                let inv_l = 1.0 / l;
-                let a = x * inv_1px * inv_l;
-                let r = a * inv_1px * inv_l;
-                let b = r * (l - x);
-                let dn = l + x * inv_1px - 2.0 * x;
-                let dden = 2.0 * (1.0 + x) * l * (l + 1.0);
-                (l.ln() - ln_x, a, b, r * (dn - b * dden))
-            };
+            let (ln_g, a, b, xdb) = pink_terms(self.ln_k + e * s);
             [c0 + s + ln_g, (1.0 - e) + e * a, e * e * b, e * e * e * xdb]
         };
         let s_lo = ln_y - self.ln_sigma;
+        if let Some(d) = self.guess.and_then(|gs| gs.eval(self.ln_k + e * s_lo)) {
+            // Start at the fitted root; the bracket's upper end is found
+            // by the iteration (φ(s_lo) ≤ 0 is known without evaluating).
+            let s0 = s_lo + d.max(0.0);
+            return solve_increasing(phi, s0, s_lo, f64::INFINITY, SURFACE_TOL).exp();
+        }
         let d_lo = phi(s_lo);
         if d_lo[0] >= 0.0 {
             // x is so small at s_lo that g(x) rounds to 1: s_lo is the root.
@@ -443,7 +570,7 @@ impl GammaCore {
         let s_hi = s_lo - d_lo[0] / (1.0 - e);
         // First step from s_lo, reusing its evaluation (a Newton step stays
         // below the root by concavity; the higher-order step may pass it by
-        // O(step⁴), and `min` keeps it inside the bracket).
+        // O(step⁴), and `clamp` keeps it inside the bracket).
         let step = householder_step(d_lo);
         if step.abs() <= SURFACE_TOL {
             return (s_lo + step).exp();

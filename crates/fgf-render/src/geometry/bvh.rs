@@ -106,6 +106,12 @@ impl Bvh {
         Bvh { nodes, order }
     }
 
+    /// `(nodes, leaves, max leaf size)`.
+    pub fn stats(&self) -> (usize, usize, u16) {
+        let leaves = self.nodes.iter().filter(|n| n.count > 0);
+        (self.nodes.len(), leaves.clone().count(), leaves.map(|n| n.count).max().unwrap_or(0))
+    }
+
     /// Bounds of the whole scene (empty if there is nothing).
     pub fn bounds(&self) -> Aabb {
         self.nodes
@@ -121,7 +127,13 @@ impl Bvh {
     /// may hit, nearest subtree first. `hit(prim, t_max)` tests primitive
     /// `prim` and returns the new `t_max` (smaller if it hit).
     #[inline]
-    pub fn traverse(&self, o: Vec3, d: Vec3, t_max: f32, mut hit: impl FnMut(u32, f32) -> f32) -> f32 {
+    pub fn traverse(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        mut hit: impl FnMut(u32, f32) -> f32,
+    ) -> f32 {
         self.traverse_leaves(o, d, t_max, |start, count, mut t_max| {
             for &p in &self.order[start as usize..(start + count) as usize] {
                 t_max = hit(p, t_max);
@@ -133,7 +145,13 @@ impl Bvh {
     /// Like [`Self::traverse`], but calls `hit(start, count, t_max)` once per
     /// leaf with its range in [`Self::order`].
     #[inline]
-    pub fn traverse_leaves(&self, o: Vec3, d: Vec3, mut t_max: f32, mut hit: impl FnMut(u32, u32, f32) -> f32) -> f32 {
+    pub fn traverse_leaves(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        mut t_max: f32,
+        mut hit: impl FnMut(u32, u32, f32) -> f32,
+    ) -> f32 {
         if self.nodes.is_empty() {
             return t_max;
         }
@@ -150,7 +168,11 @@ impl Bvh {
                     t_max = hit(node.offset, node.count as u32, t_max);
                 } else {
                     // Visit the child on the near side of the split first.
-                    let (first, second) = if neg[node.axis as usize] { (node.offset, idx + 1) } else { (idx + 1, node.offset) };
+                    let (first, second) = if neg[node.axis as usize] {
+                        (node.offset, idx + 1)
+                    } else {
+                        (idx + 1, node.offset)
+                    };
                     stack[sp] = second;
                     sp += 1;
                     idx = first;

@@ -144,8 +144,20 @@ impl TriPack {
     /// Möller–Trumbore on 4 triangles; the nearest hit among the lanes in
     /// `lanes` with `0 < t < t_max`, as `(lane, t, u, v)`.
     #[inline(always)]
-    fn intersect(&self, o: [Vec4; 3], d: [Vec4; 3], t_max: f32, lanes: u32) -> Option<(u32, f32, f32, f32)> {
-        let cross = |a: &[Vec4; 3], b: &[Vec4; 3]| [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]];
+    fn intersect(
+        &self,
+        o: [Vec4; 3],
+        d: [Vec4; 3],
+        t_max: f32,
+        lanes: u32,
+    ) -> Option<(u32, f32, f32, f32)> {
+        let cross = |a: &[Vec4; 3], b: &[Vec4; 3]| {
+            [
+                a[1] * b[2] - a[2] * b[1],
+                a[2] * b[0] - a[0] * b[2],
+                a[0] * b[1] - a[1] * b[0],
+            ]
+        };
         let dot = |a: &[Vec4; 3], b: &[Vec4; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let pvec = cross(&d, &self.e2);
         let det = dot(&self.e1, &pvec);
@@ -157,7 +169,12 @@ impl TriPack {
         let t = dot(&self.e2, &qvec) * inv_det;
         let zero = Vec4::ZERO;
         // A zero determinant gives inf/NaN above; NaN fails every comparison.
-        let ok = det.cmpne(zero) & u.cmpge(zero) & v.cmpge(zero) & (u + v).cmple(Vec4::ONE) & t.cmpgt(zero) & t.cmplt(Vec4::splat(t_max));
+        let ok = det.cmpne(zero)
+            & u.cmpge(zero)
+            & v.cmpge(zero)
+            & (u + v).cmple(Vec4::ONE)
+            & t.cmpgt(zero)
+            & t.cmplt(Vec4::splat(t_max));
         let mut mask = ok.bitmask() & lanes & self.tri_mask;
         let mut best: Option<(u32, f32, f32, f32)> = None;
         let (ta, ua, va) = (t.to_array(), u.to_array(), v.to_array());
@@ -352,7 +369,10 @@ impl Geometry {
         // each leaf starting a pack of 4.
         g.bvh.pad_leaves(4, PAD);
         let order = std::mem::take(&mut g.bvh.order);
-        let prims: Vec<u32> = order.iter().map(|&i| if i == PAD { PAD } else { g.prims[i as usize] }).collect();
+        let prims: Vec<u32> = order
+            .iter()
+            .map(|&i| if i == PAD { PAD } else { g.prims[i as usize] })
+            .collect();
         g.bvh.order = (0..prims.len() as u32).collect();
         g.prims = prims;
         g.packs = g
@@ -380,7 +400,13 @@ impl Geometry {
                     }
                 }
                 let v = |a: [[f32; 4]; 3]| a.map(Vec4::from_array);
-                TriPack { v0: v(v0), e1: v(e1), e2: v(e2), tri_mask, other_mask }
+                TriPack {
+                    v0: v(v0),
+                    e1: v(e1),
+                    e2: v(e2),
+                    tri_mask,
+                    other_mask,
+                }
             })
             .collect();
         Ok(g)
@@ -476,6 +502,11 @@ impl Geometry {
         }
     }
 
+    /// BVH layout summary (for profiling).
+    pub fn debug_layout(&self) -> String {
+        format!("{} prims (with padding), {} packs, bvh {:?}", self.prims.len(), self.packs.len(), self.bvh.stats())
+    }
+
     /// World bounds of all surfaces.
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds()
@@ -485,40 +516,53 @@ impl Geometry {
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
-        let o4 = [Vec4::splat(ray.o.x), Vec4::splat(ray.o.y), Vec4::splat(ray.o.z)];
-        let d4 = [Vec4::splat(ray.d.x), Vec4::splat(ray.d.y), Vec4::splat(ray.d.z)];
-        self.bvh.traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_max| {
-            // Leaves start at multiples of 4 (see `Bvh::pad_leaves`).
-            let end = start + count;
-            let mut k = start;
-            while k < end {
-                let pack = &self.packs[(k / 4) as usize];
-                let lanes = if end - k >= 4 { 0xF } else { (1u32 << (end - k)) - 1 };
-                if pack.tri_mask & lanes != 0 {
-                    if let Some((lane, t, u, v)) = pack.intersect(o4, d4, t_max, lanes) {
-                        best = Some((self.prims[(k + lane) as usize], t, u, v));
-                        t_max = t;
-                    }
-                }
-                let mut other = pack.other_mask & lanes;
-                while other != 0 {
-                    let lane = other.trailing_zeros();
-                    other &= other - 1;
-                    let p = self.prims[(k + lane) as usize];
-                    let i = (p & INDEX_MASK) as usize;
-                    let r = match p >> KIND_SHIFT {
-                        KIND_SPHERE => intersect_sphere(&self.spheres[i], ray, t_max),
-                        _ => intersect_disk(&self.disks[i], ray, t_max),
+        let o4 = [
+            Vec4::splat(ray.o.x),
+            Vec4::splat(ray.o.y),
+            Vec4::splat(ray.o.z),
+        ];
+        let d4 = [
+            Vec4::splat(ray.d.x),
+            Vec4::splat(ray.d.y),
+            Vec4::splat(ray.d.z),
+        ];
+        self.bvh
+            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_max| {
+                // Leaves start at multiples of 4 (see `Bvh::pad_leaves`).
+                let end = start + count;
+                let mut k = start;
+                while k < end {
+                    let pack = &self.packs[(k / 4) as usize];
+                    let lanes = if end - k >= 4 {
+                        0xF
+                    } else {
+                        (1u32 << (end - k)) - 1
                     };
-                    if let Some((t, u, v)) = r {
-                        best = Some((p, t, u, v));
-                        t_max = t;
+                    if pack.tri_mask & lanes != 0 {
+                        if let Some((lane, t, u, v)) = pack.intersect(o4, d4, t_max, lanes) {
+                            best = Some((self.prims[(k + lane) as usize], t, u, v));
+                            t_max = t;
+                        }
                     }
+                    let mut other = pack.other_mask & lanes;
+                    while other != 0 {
+                        let lane = other.trailing_zeros();
+                        other &= other - 1;
+                        let p = self.prims[(k + lane) as usize];
+                        let i = (p & INDEX_MASK) as usize;
+                        let r = match p >> KIND_SHIFT {
+                            KIND_SPHERE => intersect_sphere(&self.spheres[i], ray, t_max),
+                            _ => intersect_disk(&self.disks[i], ray, t_max),
+                        };
+                        if let Some((t, u, v)) = r {
+                            best = Some((p, t, u, v));
+                            t_max = t;
+                        }
+                    }
+                    k += 4;
                 }
-                k += 4;
-            }
-            t_max
-        });
+                t_max
+            });
         let (p, t, u, v) = best?;
         let i = (p & INDEX_MASK) as usize;
         let pt = ray.at(t);
@@ -692,7 +736,11 @@ mod tests {
             }
             indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
         }
-        let mesh = Arc::new(TriangleMesh { positions, normals: None, indices });
+        let mesh = Arc::new(TriangleMesh {
+            positions,
+            normals: None,
+            indices,
+        });
         let shape = ShapeDesc {
             name: "soup".into(),
             geometry: GeometryDesc::Mesh(mesh),

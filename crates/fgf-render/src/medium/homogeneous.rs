@@ -30,6 +30,10 @@ pub struct Homogeneous {
 #[inline]
 fn tr(sigma_t: Spectrum, t: f32) -> Spectrum {
     let f = |s: f32| if s == 0.0 { 1.0 } else { (-s * t).exp() };
+    // Grey media (the common case) need one exponential, not three.
+    if sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z {
+        return Spectrum::splat(f(sigma_t.x));
+    }
     Spectrum::new(f(sigma_t.x), f(sigma_t.y), f(sigma_t.z))
 }
 

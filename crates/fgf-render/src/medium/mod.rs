@@ -34,6 +34,7 @@
 //! |---|---|---|
 //! | `homogeneous` | `sigma_t` (1/m, float or rgb, default 1), `albedo` (float or rgb in [0,1], default 0.75), `scale` (default 1), `phase` | analytic free flights, one-sample MIS over the RGB channels |
 //! | `heterogeneous` | `sigma_t` and `albedo` as `gridvolume` or constants, `scale`, `phase` | delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA |
+//! | `fgf`, `nonexponential` | `sigma_t`, `albedo`, `scale`, `phase`; `hurst`, `sw`, `length` (fgf) or `transmittance` with `alpha` / `h`, `c`; `kernel`; optional `density` gridvolume | non-exponential transmittance (`theory.md` §3–4): see [`nonexp`] |
 //!
 //! ```xml
 //! <shape type="cube">

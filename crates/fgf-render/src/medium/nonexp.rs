@@ -487,7 +487,8 @@ impl Density {
         let tb = (DVec3::ONE - o) * inv;
         let t_in = ta.min(tb).max_element().max(0.0);
         let t_out = ta.max(tb).min_element().min(t_max);
-        if !(t_in < t_out) {
+        // Also false for NaN bounds (a degenerate ray): nothing to walk.
+        if t_in.partial_cmp(&t_out) != Some(std::cmp::Ordering::Less) {
             return None;
         }
         // Per axis: the next boundary plane (j + offset)/res crossed after
