@@ -1213,6 +1213,9 @@ mod tests {
             // Enough z-slabs for the slab-fused passes (n0 >= 4 threads).
             (vec![40, 6, 10], -0.3, None),
             (vec![24, 4, 6], 0.7, Some(1.7)),
+            // Cubic 3D grids use the |k|^(-s) table.
+            (vec![8, 8, 8], -0.4, None),
+            (vec![6, 6, 6], 1.3, Some(2.0)),
         ];
         for (shape, h, padding) in cases {
             let mut p = SynthParams::new(&shape, h);

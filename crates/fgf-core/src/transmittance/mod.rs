@@ -813,6 +813,28 @@ mod tests {
         assert!(((x_neg_dg(x) - x / 2.0) / (x / 2.0)).abs() < 1e-7);
     }
 
+    /// The fitted start is within 1e-3 of the root for moderate `e` over
+    /// its window (so one evaluation suffices), and absent outside it.
+    #[test]
+    fn start_guess_fits_the_root() {
+        for e in [0.1, 0.5, 0.8] {
+            let gs = StartGuess::new(e, 0.0).unwrap();
+            for i in 0..=200 {
+                let z = -8.0 + 11.0 * i as f64 / 200.0;
+                let phi = |dd: f64| -> [f64; 4] {
+                    let (ln_g, a, b, xdb) = pink_terms(z + e * dd);
+                    [dd + ln_g, (1.0 - e) + e * a, e * e * b, e * e * e * xdb]
+                };
+                let hi = -phi(0.0)[0] / (1.0 - e);
+                let d = solve_increasing(phi, 0.0, 0.0, hi, 1e-12);
+                let err = (gs.eval(z).unwrap() - d).abs();
+                assert!(err < 1e-3, "e = {e}, z = {z}: err {err:e}");
+            }
+            assert!(gs.eval(-8.1).is_none() && gs.eval(3.1).is_none());
+        }
+        assert!(StartGuess::new(0.0, 0.0).is_none() && StartGuess::new(1.0, 0.0).is_none());
+    }
+
     #[test]
     fn solver_finds_root_of_a_line_and_handles_overflow() {
         let s = solve_increasing(

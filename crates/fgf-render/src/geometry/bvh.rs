@@ -1,6 +1,7 @@
 //! A bounding volume hierarchy over every primitive of the scene (triangles
 //! of all meshes, spheres, disks): a binned surface-area-heuristic build
-//! (12 bins per axis, leaves of at most 4 primitives) flattened in
+//! (12 bins per axis, leaves of at most 16 primitives, tested in
+//! SIMD packs of 4, with the SAH cost counted in packs) flattened in
 //! depth-first order, traversed front-to-back with a small stack.
 //!
 //! We wrote our own rather than depend on a crate: it is ~200 lines, has no
@@ -92,7 +93,17 @@ pub struct Bvh {
 }
 
 const BINS: usize = 12;
-const MAX_LEAF: usize = 4;
+/// Leaves are tested in SIMD packs of 4 primitives; a leaf holds at most
+/// `MAX_LEAF` (4 packs) and the SAH counts cost in packs, not primitives.
+const PACK: usize = 4;
+const MAX_LEAF: usize = 16;
+/// Cost of a node's slab test relative to one 4-wide pack test.
+const TRAVERSAL_COST: f32 = 0.5;
+
+#[inline]
+fn packs(n: usize) -> f32 {
+    n.div_ceil(PACK) as f32
+}
 
 impl Bvh {
     /// Build over primitives given by their bounds.
@@ -104,12 +115,6 @@ impl Bvh {
             build_rec(bounds, &centroids, &mut order, 0, bounds.len(), &mut nodes);
         }
         Bvh { nodes, order }
-    }
-
-    /// `(nodes, leaves, max leaf size)`.
-    pub fn stats(&self) -> (usize, usize, u16) {
-        let leaves = self.nodes.iter().filter(|n| n.count > 0);
-        (self.nodes.len(), leaves.clone().count(), leaves.map(|n| n.count).max().unwrap_or(0))
     }
 
     /// Bounds of the whole scene (empty if there is nothing).
@@ -248,7 +253,7 @@ fn build_rec(
         axis: 0,
     });
     let n = end - start;
-    if n <= MAX_LEAF {
+    if n <= PACK {
         return node_idx;
     }
     // Choose the axis and bin boundary of least SAH cost.
@@ -286,20 +291,21 @@ fn build_rec(
                 continue;
             }
             let cost =
-                acc.surface_area() * cnt as f32 + right_area[split] * right_count[split] as f32;
+                acc.surface_area() * packs(cnt) + right_area[split] * packs(right_count[split]);
             if best.map_or(true, |(c, _, _)| cost < c) {
                 best = Some((cost, axis, split));
             }
         }
     }
-    // Leaf cost n·SA(node) against 1 traversal step + children (relative
-    // costs 1 : 1); when no split helps and the leaf is small enough, stop.
     let mid = match best {
         Some((cost, axis, split)) => {
-            // Leaf cost n·SA(node) against the children's cost (traversal
-            // and intersection costs taken equal); small nodes that no split
-            // improves stay leaves.
-            if cost >= n as f32 * bb.surface_area() && n <= 2 * MAX_LEAF {
+            // Surface-area heuristic in pack units: a leaf costs its packs
+            // times SA(node); a split costs one traversal step plus the
+            // children's packs weighted by their areas. Leaves up to
+            // MAX_LEAF primitives stay leaves when splitting does not pay.
+            if TRAVERSAL_COST * bb.surface_area() + cost >= packs(n) * bb.surface_area()
+                && n <= MAX_LEAF
+            {
                 return node_idx;
             }
             let scale = BINS as f32 / extent[axis];
@@ -318,7 +324,7 @@ fn build_rec(
         }
         None => {
             // All centroids coincide: split by count so leaves stay small.
-            if n <= 2 * MAX_LEAF {
+            if n <= MAX_LEAF {
                 return node_idx;
             }
             start + n / 2

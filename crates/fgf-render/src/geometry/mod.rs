@@ -502,11 +502,6 @@ impl Geometry {
         }
     }
 
-    /// BVH layout summary (for profiling).
-    pub fn debug_layout(&self) -> String {
-        format!("{} prims (with padding), {} packs, bvh {:?}", self.prims.len(), self.packs.len(), self.bvh.stats())
-    }
-
     /// World bounds of all surfaces.
     pub fn bounds(&self) -> Aabb {
         self.bvh.bounds()
