@@ -22,11 +22,12 @@
 //! sums) is collected per plane and added in plane order, so the output is
 //! bit-identical for any number of threads.
 //!
-//! Memory: without padding the whole computation runs in the output buffer
-//! itself (`nz·ny·(nx+2)` values, then compacted to `nz·ny·nx` in place), so
-//! the peak is the output plus ~2/nx and per-thread scratch. With padding `p`
-//! the padded spectrum (`p^d` times the output) is allocated as well as the
-//! output: a k-fBm at the default `p = 2` in 3D costs ~9× the output array.
+//! Memory: the whole computation runs in one buffer holding the half
+//! spectrum of the periodic domain (`Nz·Ny·(Nx+2)` values), which is then
+//! cropped and compacted in place into the output and shrunk. Without
+//! padding the peak is the output plus ~2/nx and per-thread scratch; with
+//! padding `p` it is `p^d` times the output (a 3D k-fBm at the default
+//! `p = 2`: ~8× the output array).
 
 use crate::noise::{stream, Purpose};
 use fgf_core::{ParamError, Progress};
@@ -412,22 +413,14 @@ impl Plan {
         })
     }
 
-    fn in_place(&self) -> bool {
-        self.pad == self.out
-    }
-
-    /// Bytes the synthesis allocates at its peak (buffers, not scratch).
+    /// Bytes the synthesis allocates at its peak (the one buffer holding
+    /// the padded half spectrum, later the output; not scratch).
     pub(crate) fn bytes(&self, elem: usize) -> Option<u64> {
         let [n0, n1, n2] = self.pad;
-        let spec = (n0 as u64)
+        (n0 as u64)
             .checked_mul(n1 as u64)?
-            .checked_mul(2 * (n2 as u64 / 2 + 1))?;
-        let out: u64 = if self.in_place() {
-            0
-        } else {
-            self.out.iter().map(|&n| n as u64).product()
-        };
-        spec.checked_add(out)?.checked_mul(elem as u64)
+            .checked_mul(2 * (n2 as u64 / 2 + 1))?
+            .checked_mul(elem as u64)
     }
 
     /// Work units reported to [`Progress`].
@@ -1028,9 +1021,14 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
             vec![Complex::<T>::zero(); iy.get_inplace_scratch_len()],
         )
     };
-    if plan.in_place() {
-        if fused {
-            buf.par_chunks_mut(n1 * row_len).enumerate().for_each_init(
+    // Each kept row's values go to its own first o2 reals; the rows are then
+    // compacted to the front of the buffer, so the output never needs a
+    // second allocation, with or without padding.
+    if fused {
+        buf.par_chunks_mut(n1 * row_len)
+            .take(o0)
+            .enumerate()
+            .for_each_init(
                 || {
                     (
                         c2r.make_output_vec(),
@@ -1044,81 +1042,47 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                         return;
                     }
                     y_fft_slab(as_complex_mut(slab), n1, nxh, &iy, tmp, yscr);
-                    for (y, row) in slab.chunks_mut(row_len).enumerate() {
+                    for (y, row) in slab.chunks_mut(row_len).take(o1).enumerate() {
                         c.copy_from_slice(as_complex_mut(row));
-                        finish_row(c, o, scr, &mut row[..n2], z, y);
+                        finish_row(c, o, scr, &mut row[..o2], z, y);
                     }
-                    progress.inc((nblk + n1) as u64);
+                    progress.inc((nblk + o1) as u64);
                 },
             );
-        } else {
-            buf.par_chunks_mut(row_len).enumerate().for_each_init(
-                || {
-                    (
-                        c2r.make_output_vec(),
-                        c2r.make_scratch_vec(),
-                        vec![Complex::<T>::zero(); nxh],
-                    )
-                },
-                |(o, scr, c), (r, row)| {
-                    if progress.cancelled() {
-                        return;
-                    }
-                    c.copy_from_slice(as_complex_mut(row));
-                    finish_row(c, o, scr, &mut row[..n2], r / n1, r % n1);
-                    progress.inc(1);
-                },
-            );
-        }
-        cancel_check(progress)?;
-        // Compact rows of 2(nx/2+1) to rows of nx, front to back: each row
-        // moves to a lower or equal offset, so nothing unread is overwritten.
-        for r in 1..n0 * n1 {
-            buf.copy_within(r * row_len..r * row_len + n2, r * n2);
-        }
-        buf.truncate(n0 * n1 * n2);
-        buf.shrink_to_fit();
-        Ok(buf)
     } else {
-        let mut out: Vec<T> = vec![T::zero(); o0 * o1 * o2];
-        if fused {
-            buf.par_chunks_mut(n1 * row_len)
-                .zip(out.par_chunks_mut(o1 * o2))
-                .enumerate()
-                .for_each_init(
-                    || (c2r.make_output_vec(), c2r.make_scratch_vec(), y_init()),
-                    |(o, scr, (tmp, yscr)), (z, (slab, oslab))| {
-                        if progress.cancelled() {
-                            return;
-                        }
-                        let slab = as_complex_mut(slab);
-                        y_fft_slab(slab, n1, nxh, &iy, tmp, yscr);
-                        for (y, orow) in oslab.chunks_mut(o2).enumerate() {
-                            finish_row(&mut slab[y * nxh..(y + 1) * nxh], o, scr, orow, z, y);
-                        }
-                        progress.inc((nblk + o1) as u64);
-                    },
-                );
-        } else {
-            out.par_chunks_mut(o2).enumerate().for_each_init(
-                || (c2r.make_output_vec(), c2r.make_scratch_vec()),
-                |(o, scr), (r, orow)| {
-                    if progress.cancelled() {
-                        return;
-                    }
-                    let (z, y) = (r / o1, r % o1);
-                    // SAFETY: output row (z, y) is the only reader of padded row (z, y).
-                    let c = unsafe {
-                        std::slice::from_raw_parts_mut(spec.get().add((z * n1 + y) * nxh), nxh)
-                    };
-                    finish_row(c, o, scr, orow, z, y);
-                    progress.inc(1);
-                },
-            );
-        }
-        cancel_check(progress)?;
-        Ok(out)
+        buf.par_chunks_mut(row_len).enumerate().for_each_init(
+            || {
+                (
+                    c2r.make_output_vec(),
+                    c2r.make_scratch_vec(),
+                    vec![Complex::<T>::zero(); nxh],
+                )
+            },
+            |(o, scr, c), (r, row)| {
+                let (z, y) = (r / n1, r % n1);
+                if z >= o0 || y >= o1 || progress.cancelled() {
+                    return;
+                }
+                c.copy_from_slice(as_complex_mut(row));
+                finish_row(c, o, scr, &mut row[..o2], z, y);
+                progress.inc(1);
+            },
+        );
     }
+    cancel_check(progress)?;
+    // Front to back, each row moves to a lower or equal offset
+    // ((z·o1 + y)·o2 <= (z·n1 + y)·row_len), so nothing unread is overwritten.
+    for z in 0..o0 {
+        for y in 0..o1 {
+            let (src, dst) = ((z * n1 + y) * row_len, (z * o1 + y) * o2);
+            if src != dst {
+                buf.copy_within(src..src + o2, dst);
+            }
+        }
+    }
+    buf.truncate(o0 * o1 * o2);
+    buf.shrink_to_fit();
+    Ok(buf)
 }
 
 #[cfg(test)]

@@ -66,9 +66,12 @@ use crate::stats::{check_length, ln_line_average_variance, s_p, Regime, HURST_RA
 pub struct Fgf {
     hurst: f64,
     sw: f64,
-    length: Option<f64>,
+    /// `L` for k-fBm, 0 otherwise (valid lengths are > 0; not NaN, so that
+    /// `PartialEq` stays reflexive): an `Option<f64>` would cost an 8-byte
+    /// tag, and `ln L` is recomputed (bit-identically) where needed, so that
+    /// `Model` keeps within 256 bytes with the samplers' fitted starts.
+    length: f64,
     regime: Regime,
-    ln_length: f64,
     pub(crate) core: GammaCore,
 }
 
@@ -93,9 +96,8 @@ impl Fgf {
         Ok(Fgf {
             hurst,
             sw,
-            length,
+            length: length.unwrap_or(0.0),
             regime,
-            ln_length,
             core: GammaCore::new(sigma_t, k, e),
         })
     }
@@ -107,7 +109,12 @@ impl Fgf {
         self.sw
     }
     pub fn length(&self) -> Option<f64> {
-        self.length
+        (self.length > 0.0).then_some(self.length)
+    }
+
+    /// `ln L` for k-fBm, 0 otherwise (unused there).
+    fn ln_length(&self) -> f64 {
+        self.length().map_or(0.0, f64::ln)
     }
     pub fn regime(&self) -> Regime {
         self.regime
@@ -119,7 +126,7 @@ impl Fgf {
         if !(t >= 0.0) {
             return f64::NAN;
         }
-        ln_line_average_variance(self.regime, self.hurst, self.sw, t.ln(), self.ln_length).exp()
+        ln_line_average_variance(self.regime, self.hurst, self.sw, t.ln(), self.ln_length()).exp()
     }
 
     /// `α(t) = σ_m² / v(t)`: 0 at `t = 0` for white and pink noise, constant
@@ -129,7 +136,7 @@ impl Fgf {
             return f64::NAN;
         }
         let ln_v =
-            ln_line_average_variance(self.regime, self.hurst, self.sw, t.ln(), self.ln_length);
+            ln_line_average_variance(self.regime, self.hurst, self.sw, t.ln(), self.ln_length());
         (2.0 * self.core.sigma.ln() - ln_v).exp()
     }
 

@@ -4,11 +4,14 @@
 //! SIMD packs of 4, with the SAH cost counted in packs) flattened in
 //! depth-first order, traversed front-to-back with a small stack.
 //!
-//! We wrote our own rather than depend on a crate: it is ~200 lines, has no
-//! unsafe code, handles our mixed primitive kinds through one `match`, and
-//! on the reference scenes the BVH is not the bottleneck (media are). The
-//! `bvh` crate was considered; its traversal returns candidate lists
-//! (allocation per ray) that cost more than this stack traversal.
+//! We wrote our own rather than depend on a crate: it is a few hundred
+//! lines without unsafe code, its leaves mix triangles with analytic spheres
+//! and disks, and it tests leaf triangles 4 at a time (`TriPack` in
+//! `geometry/mod.rs`), which is what matters for scenes of a handful of
+//! primitives like the reference ones. Ray casting is about 40 % of the time
+//! on the homogeneous reference scene (measured with `perf`); going from
+//! per-triangle tests to SIMD slab tests and 4-wide leaf packs made the whole
+//! renderer 15 % faster there.
 
 use glam::{Vec3, Vec3A};
 
