@@ -19,7 +19,6 @@ is in the Rust module ``fgf_render::ensemble``.
 from __future__ import annotations
 
 import os
-import sys
 from typing import Any, Callable, Mapping, Sequence
 
 from . import _core
@@ -88,31 +87,20 @@ def ensemble(
     KeyboardInterrupt
         On Ctrl-C, after the samples in flight finish.
     """
-    from .render import _TqdmOnFirstCall, _defines_list
+    from ._progress import check_seed, progress_sink
+    from .render import _defines_list
 
-    closer = None
-    if progress is True:
-        if sys.stderr.isatty():
-            closer = _TqdmOnFirstCall()
-            progress = closer
-        else:
-            progress = None
-    elif progress is False:
-        progress = None
-    try:
+    with progress_sink(progress, "ensemble") as sink:
         mean, stderr, info, interrupted = _core.ensemble_scene(
             os.fspath(scene),
             int(realizations),
             resolution=resolution,
             spp=spp,
-            seed=int(seed),
+            seed=check_seed(seed),
             threads=threads,
             defines=_defines_list(defines),
-            progress=progress,
+            progress=sink,
         )
-    finally:
-        if closer is not None:
-            closer.close()
     if interrupted:
         raise KeyboardInterrupt(f"ensemble interrupted after {info['realizations_done']} realizations")
     return (mean, stderr, info) if return_info else (mean, stderr)

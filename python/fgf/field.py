@@ -29,12 +29,12 @@ Examples
 
 from __future__ import annotations
 
-import sys
 from typing import Any, Callable, Sequence, Union
 
 import numpy as np
 
 from . import _core
+from ._progress import check_int, check_seed, progress_sink
 
 __all__ = [
     "synthesize",
@@ -54,46 +54,16 @@ Progress = Union[bool, None, Any, Callable[[int, int], None]]
 Anchor = Union[str, None, Sequence[int]]
 
 
-class _LazyBar:
-    """A ``progress(done, total)`` callable that opens a tqdm bar on first use."""
-
-    def __init__(self, desc: str):
-        self.desc = desc
-        self.bar = None
-
-    def __call__(self, done: int, total: int) -> None:
-        if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, desc=self.desc, file=sys.stderr)
-        self.bar.update(done - self.bar.n)
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
-
-
 def _run(fn, progress: Progress, desc: str, *args):
-    """Call ``fn(*args, progress)`` translating ``progress=True``/``False``."""
-    bar = None
-    if progress is True:
-        if sys.stderr.isatty():
-            bar = progress = _LazyBar(desc)
-        else:
-            progress = None
-    elif progress is False:
-        progress = None
-    try:
-        return fn(*args, progress)
-    finally:
-        if bar is not None:
-            bar.close()
+    """Call ``fn(*args, progress)`` with the public ``progress=`` translated."""
+    with progress_sink(progress, desc) as sink:
+        return fn(*args, sink)
 
 
 def _shape(shape) -> list[int]:
     if isinstance(shape, (int, np.integer)):
-        return [int(shape)]
-    return [int(n) for n in shape]
+        shape = [shape]
+    return [check_int("shape", n, 1, 2**62) for n in shape]
 
 
 def synthesize(
@@ -182,7 +152,7 @@ def synthesize(
         float(hurst),
         float(sw),
         float(spacing),
-        int(seed),
+        check_seed(seed),
         anchor,
         None if padding is None else float(padding),
         np.dtype(dtype).name,
@@ -273,7 +243,15 @@ def sample_optical_depth(
     >>> line_avg = tau[:, -1] / t[-1]   # variance ~ S_p t^(2H)
     """
     return _run(
-        _core.sample_optical_depth, progress, "optical depth", int(n_rays), int(n_steps), float(t_max), float(hurst), float(sw), int(seed)
+        _core.sample_optical_depth,
+        progress,
+        "optical depth",
+        check_int("n_rays", n_rays, 1, 2**62),
+        check_int("n_steps", n_steps, 1, 2**62),
+        float(t_max),
+        float(hurst),
+        float(sw),
+        check_seed(seed),
     )[0]
 
 
@@ -304,7 +282,15 @@ def sample_kfbm_1d(
     ((3, 11), 0.0)
     """
     return _run(
-        _core.sample_kfbm_1d, progress, "k-fBm", int(n_samples), int(n_steps), float(length), float(hurst), float(sw), int(seed)
+        _core.sample_kfbm_1d,
+        progress,
+        "k-fBm",
+        check_int("n_samples", n_samples, 1, 2**62),
+        check_int("n_steps", n_steps, 1, 2**62),
+        float(length),
+        float(hurst),
+        float(sw),
+        check_seed(seed),
     )[0]
 
 

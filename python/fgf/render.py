@@ -14,12 +14,12 @@ family). Images are linear RGB, row 0 at the top.
 from __future__ import annotations
 
 import os
-import sys
 from typing import Any, Callable, Mapping, Sequence
 
 import numpy as np
 
 from . import _core
+from ._progress import check_seed, progress_sink
 
 __all__ = ["render", "write_exr", "write_png"]
 
@@ -40,26 +40,6 @@ def _defines_list(defines: Mapping[str, Any] | Sequence[str] | None) -> list[tup
             name, value = d
             out.append((str(name), str(value)))
     return out
-
-
-class _TqdmOnFirstCall:
-    """A ``progress(done, total)`` callable that opens a tqdm bar lazily."""
-
-    def __init__(self) -> None:
-        self.bar = None
-        self.last = 0
-
-    def __call__(self, done: int, total: int) -> None:
-        if self.bar is None:
-            from tqdm import tqdm
-
-            self.bar = tqdm(total=total, unit="samples", unit_scale=True, desc="render", file=sys.stderr)
-        self.bar.update(done - self.last)
-        self.last = done
-
-    def close(self) -> None:
-        if self.bar is not None:
-            self.bar.close()
 
 
 def render(
@@ -112,28 +92,16 @@ def render(
         instead writes the partial image; use it for long interruptible
         renders).
     """
-    closer = None
-    if progress is True:
-        if sys.stderr.isatty():
-            closer = _TqdmOnFirstCall()
-            progress = closer
-        else:
-            progress = None
-    elif progress is False:
-        progress = None
-    try:
+    with progress_sink(progress, "render") as sink:
         img, var, done, interrupted = _core.render_scene(
             os.fspath(scene),
             spp=spp,
-            seed=seed,
+            seed=None if seed is None else check_seed(seed),
             threads=threads,
             defines=_defines_list(defines),
-            progress=progress,
+            progress=sink,
             return_variance=return_variance,
         )
-    finally:
-        if closer is not None:
-            closer.close()
     if interrupted:
         raise KeyboardInterrupt(f"render interrupted after {done} samples per pixel")
     return (img, var) if return_variance else img

@@ -227,7 +227,7 @@ class TransmittanceModel:
 
     def __repr__(self) -> str:
         p = self.params
-        kind = p.pop("kind")
+        p.pop("kind")
         p.pop("regime", None)
         p.pop("k", None)
         if p.get("length", 0) is None:

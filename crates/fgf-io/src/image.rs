@@ -159,6 +159,24 @@ mod tests {
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temp file left behind");
     }
 
+    #[cfg(unix)]
+    #[test]
+    fn written_files_follow_the_umask_not_0600() {
+        use std::os::unix::fs::PermissionsExt;
+        let dir = tempfile::tempdir().unwrap();
+        let p = dir.path().join("m.png");
+        write_png8(&p, 1, 1, 1, &[7]).unwrap();
+        // Read the umask from /proc (Linux) to know what to expect.
+        let status = std::fs::read_to_string("/proc/self/status").unwrap();
+        let umask = status
+            .lines()
+            .find_map(|l| l.strip_prefix("Umask:"))
+            .map(|v| u32::from_str_radix(v.trim(), 8).unwrap())
+            .unwrap();
+        let mode = std::fs::metadata(&p).unwrap().permissions().mode() & 0o777;
+        assert_eq!(mode, 0o666 & !umask);
+    }
+
     #[test]
     fn srgb_curve_end_points() {
         assert_eq!(to_srgb8(&[0.0, 1.0, 5.0, f32::NAN, -1.0], 0.0), vec![0, 255, 255, 0, 0]);

@@ -61,8 +61,17 @@ where
             format!("output directory {} does not exist", dir.display()),
         ));
     }
-    let tmp = tempfile::Builder::new()
-        .prefix(".fgf-tmp-")
+    let mut builder = tempfile::Builder::new();
+    builder.prefix(".fgf-tmp-");
+    // tempfile creates private (0600) files; ask for 0666 instead, which the
+    // OS reduces by the umask, so the result has the permissions a plain
+    // `File::create` would give.
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        builder.permissions(std::fs::Permissions::from_mode(0o666));
+    }
+    let tmp = builder
         .tempfile_in(&dir)
         .map_err(|e| IoError::io(path, e))?;
     {

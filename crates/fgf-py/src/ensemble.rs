@@ -1,13 +1,10 @@
 //! Python binding of the explicit-realization ensemble (issue 5):
 //! `ensemble_scene` behind `fgf.ensemble` and `fgf ensemble`.
 
-use crate::errors::{ParameterError, SceneError};
+use crate::errors::ParameterError;
 use crate::progress::run_job;
+use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
 use fgf_render::ensemble::{ensemble, total_samples, EnsembleOptions};
-use fgf_render::scene::SceneErrorKind;
-use fgf_render::RenderError;
-use numpy::{PyArray1, PyArrayMethods};
-use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -41,29 +38,14 @@ fn ensemble_scene<'py>(
             "realizations = 0; need at least 1 (2 for a standard error)",
         ));
     }
-    if spp == Some(0) {
-        return Err(ParameterError::new_err(
-            "spp = 0; need at least 1 sample per pixel",
-        ));
-    }
+    check_spp_threads(spp, threads)?;
     if resolution.is_some_and(|r| r < 2) {
         return Err(ParameterError::new_err(format!(
             "resolution = {}; need at least 2 voxels along the longest side",
             resolution.unwrap_or(0)
         )));
     }
-    if threads == Some(0) {
-        return Err(ParameterError::new_err(
-            "threads = 0; need at least 1 thread (or None for all cores)",
-        ));
-    }
-    let defines = defines.unwrap_or_default();
-    let desc = py
-        .detach(|| fgf_render::scene::load_file(&scene, &defines))
-        .map_err(|e| match e.kind {
-            SceneErrorKind::Io => PyOSError::new_err(e.to_string()),
-            _ => SceneError::new_err(e.to_string()),
-        })?;
+    let desc = load_scene(py, &scene, defines)?;
     let opts = EnsembleOptions {
         realizations,
         resolution: resolution.unwrap_or(fgf_render::ensemble::DEFAULT_RESOLUTION),
@@ -73,29 +55,13 @@ fn ensemble_scene<'py>(
     let total = total_samples(&desc, &opts);
     let source = scene.display().to_string();
     let job = run_job(py, total, "ensemble", progress.as_ref(), |counter| {
-        let go = || ensemble(&desc, &opts, counter);
-        match threads {
-            Some(t) => match rayon::ThreadPoolBuilder::new().num_threads(t).build() {
-                Ok(pool) => pool.install(go),
-                Err(e) => Err(RenderError::InvalidOption(format!(
-                    "cannot start {t} threads: {e}"
-                ))),
-            },
-            None => go(),
-        }
+        in_pool(threads, || ensemble(&desc, &opts, counter))
     })?;
     let interrupted = job.interrupted;
-    let out = job.value.map_err(|e| match e {
-        RenderError::InvalidOption(_) => ParameterError::new_err(e.to_string()),
-        _ => SceneError::new_err(format!("{source}: {e}")),
-    })?;
+    let out = job.value.map_err(|e| render_err(e, &source))?;
     let (h, w) = (out.height, out.width);
-    let mean = PyArray1::from_vec(py, out.mean)
-        .reshape([h, w, 3])?
-        .into_any();
-    let stderr = PyArray1::from_vec(py, out.stderr)
-        .reshape([h, w, 3])?
-        .into_any();
+    let mean = to_hw3(py, out.mean, h, w)?;
+    let stderr = to_hw3(py, out.stderr, h, w)?;
     let info = PyDict::new(py);
     info.set_item("realizations_done", out.realizations_done)?;
     info.set_item("realizations_requested", out.realizations_requested)?;

@@ -143,7 +143,15 @@ where
     let mut callback_error: Option<PyErr> = None;
     let value = py.detach(|| {
         std::thread::scope(|s| {
-            let handle = s.spawn(|| job(&counter));
+            // The job wakes the polling thread when it ends, so a short job
+            // does not wait out the 100 ms poll interval.
+            let poller = std::thread::current();
+            let counter_ref = &counter;
+            let handle = s.spawn(move || {
+                let value = job(counter_ref);
+                poller.unpark();
+                value
+            });
             let mut last = 0u64;
             while !handle.is_finished() {
                 std::thread::park_timeout(Duration::from_millis(100));

@@ -10,22 +10,66 @@ use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
-fn scene_err(e: fgf_render::scene::SceneError) -> PyErr {
+pub(crate) fn scene_err(e: fgf_render::scene::SceneError) -> PyErr {
     match e.kind {
         SceneErrorKind::Io => PyOSError::new_err(e.to_string()),
         _ => SceneError::new_err(e.to_string()),
     }
 }
 
-fn render_err(e: RenderError, source: &str) -> PyErr {
+pub(crate) fn render_err(e: RenderError, source: &str) -> PyErr {
     match e {
         RenderError::InvalidOption(_) => ParameterError::new_err(e.to_string()),
         _ => SceneError::new_err(format!("{source}: {e}")),
     }
 }
 
-fn to_hw3<'py>(py: Python<'py>, data: Vec<f32>, h: usize, w: usize) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn to_hw3<'py>(py: Python<'py>, data: Vec<f32>, h: usize, w: usize) -> PyResult<Bound<'py, PyAny>> {
     Ok(PyArray1::from_vec(py, data).reshape([h, w, 3])?.into_any())
+}
+
+/// Reject `spp = 0` and `threads = 0` (shared by render and ensemble).
+pub(crate) fn check_spp_threads(spp: Option<u32>, threads: Option<usize>) -> PyResult<()> {
+    if spp == Some(0) {
+        return Err(ParameterError::new_err(
+            "spp = 0; need at least 1 sample per pixel",
+        ));
+    }
+    if threads == Some(0) {
+        return Err(ParameterError::new_err(
+            "threads = 0; need at least 1 thread (or None for all cores)",
+        ));
+    }
+    Ok(())
+}
+
+/// Load a scene with the GIL released; loader errors become `OSError` or
+/// `fgf.SceneError`.
+pub(crate) fn load_scene(
+    py: Python<'_>,
+    scene: &std::path::Path,
+    defines: Option<Vec<(String, String)>>,
+) -> PyResult<fgf_render::scene::SceneDesc> {
+    let defines = defines.unwrap_or_default();
+    py.detach(|| fgf_render::scene::load_file(scene, &defines))
+        .map_err(scene_err)
+}
+
+/// Run `go` on a local rayon pool of `threads` workers (all cores if
+/// `None`); the global pool is left alone.
+pub(crate) fn in_pool<R: Send>(
+    threads: Option<usize>,
+    go: impl FnOnce() -> Result<R, RenderError> + Send,
+) -> Result<R, RenderError> {
+    match threads {
+        Some(t) => match rayon::ThreadPoolBuilder::new().num_threads(t).build() {
+            Ok(pool) => pool.install(go),
+            Err(e) => Err(RenderError::InvalidOption(format!(
+                "cannot start {t} threads: {e}"
+            ))),
+        },
+        None => go(),
+    }
 }
 
 /// Render a Mitsuba 3 XML scene. Returns `(image, variance or None,
@@ -43,20 +87,8 @@ fn render_scene<'py>(
     progress: Option<Bound<'py, PyAny>>,
     return_variance: bool,
 ) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u32, bool)> {
-    if spp == Some(0) {
-        return Err(ParameterError::new_err(
-            "spp = 0; need at least 1 sample per pixel",
-        ));
-    }
-    if threads == Some(0) {
-        return Err(ParameterError::new_err(
-            "threads = 0; need at least 1 thread (or None for all cores)",
-        ));
-    }
-    let defines = defines.unwrap_or_default();
-    let desc = py
-        .detach(|| fgf_render::scene::load_file(&scene, &defines))
-        .map_err(scene_err)?;
+    check_spp_threads(spp, threads)?;
+    let desc = load_scene(py, &scene, defines)?;
     let opts = RenderOptions {
         spp,
         seed,
@@ -67,16 +99,7 @@ fn render_scene<'py>(
     let total = desc.sensor.width as u64 * desc.sensor.height as u64 * total_spp;
     let source = scene.display().to_string();
     let job = run_job(py, total, "render", progress.as_ref(), |counter| {
-        let go = || fgf_render::render(&desc, &opts, counter);
-        match threads {
-            Some(t) => match rayon::ThreadPoolBuilder::new().num_threads(t).build() {
-                Ok(pool) => pool.install(go),
-                Err(e) => Err(RenderError::InvalidOption(format!(
-                    "cannot start {t} threads: {e}"
-                ))),
-            },
-            None => go(),
-        }
+        in_pool(threads, || fgf_render::render(&desc, &opts, counter))
     })?;
     let interrupted = job.interrupted;
     let out = job.value.map_err(|e| render_err(e, &source))?;

@@ -17,7 +17,8 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
+
+from ._scene_args import add_scene_options, check_scene_options
 
 
 def register(sub) -> None:
@@ -35,18 +36,7 @@ def register(sub) -> None:
     )
     p.add_argument("--spp", type=int, default=None, help="samples per pixel per realization (default: the scene's)")
     p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
-    p.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
-    p.add_argument(
-        "-D",
-        dest="defines",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override a <default> of the scene (repeatable)",
-    )
-    p.add_argument("--png", default=None, help="PNG preview of the mean (default: the EXR path with .png)")
-    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default 0)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar or report")
+    add_scene_options(p)
     p.set_defaults(func=run)
 
 
@@ -56,16 +46,9 @@ def run(args) -> int:
 
     if args.realizations < 1:
         raise ParameterError(f"--realizations {args.realizations}: need at least 1 (2 for a standard error)")
-    if args.spp is not None and args.spp < 1:
-        raise ParameterError(f"--spp {args.spp}: need at least 1 sample per pixel")
     if args.resolution is not None and args.resolution < 2:
         raise ParameterError(f"--resolution {args.resolution}: need at least 2 voxels along the longest side")
-    if args.threads is not None and args.threads < 1:
-        raise ParameterError(f"--threads {args.threads}: need at least 1 thread")
-    if args.seed < 0:
-        raise ParameterError(f"--seed {args.seed}: must be >= 0")
-    out = Path(args.output)
-    png = Path(args.png) if args.png else out.with_suffix(".png")
+    out, png = check_scene_options(args, {"--stderr": args.stderr})
     t0 = time.perf_counter()
     mean, se, info, interrupted = _core.ensemble_scene(
         args.scene,

@@ -16,6 +16,8 @@ Examples::
 
 from __future__ import annotations
 
+from .._progress import check_int, check_seed
+
 import argparse
 import sys
 
@@ -30,7 +32,7 @@ def register(sub) -> None:
     )
     p.add_argument("--shape", type=int, nargs="+", required=True, metavar="N", help="grid shape, C order: nx | ny nx | nz ny nx")
     p.add_argument("--hurst", type=float, required=True, help="Hurst parameter H: -d/2 white, (-d/2, 0) pink, (k-1, k) k-fBm, k <= 3")
-    p.add_argument("--sw", type=float, default=1.0, help="white-noise strength S_w > 0 (default 1)")
+    p.add_argument("--sw", type=float, default=None, help="white-noise strength S_w > 0 (default 1)")
     p.add_argument(
         "--sw-ray",
         type=float,
@@ -83,17 +85,20 @@ def run(args) -> int:
         raise FgfError(f"{out}: unknown output extension {'.' + ext if ext else '(none)'}; use .npy, .vol, .exr or .png")
     if ext in ("png", "exr") and len(args.shape) != 2:
         raise FgfError(f"{out}: {ext.upper()} output needs a 2D field, --shape has {len(args.shape)} axes; use .npy or .vol")
-    sw = args.sw
+    sw = 1.0 if args.sw is None else args.sw
     if args.sw_ray is not None:
+        if args.sw is not None:
+            raise FgfError("--sw and --sw-ray are alternatives; give one of them")
         if len(args.shape) != 3:
             raise FgfError("--sw-ray applies to 3D fields only")
         sw = field.sw_3d_for_ray_statistics(args.hurst, args.sw_ray)
+    shape = [check_int("--shape", n, 1, 2**62) for n in args.shape]
     f = synthesize(
-        args.shape,
+        shape,
         args.hurst,
         sw,
         args.spacing,
-        args.seed,
+        check_seed(args.seed),
         _anchor(args.anchor),
         args.padding,
         "float64" if args.float64 else "float32",

@@ -12,7 +12,8 @@ from __future__ import annotations
 
 import sys
 import time
-from pathlib import Path
+
+from ._scene_args import add_scene_options, check_scene_options
 
 
 def register(sub) -> None:
@@ -25,33 +26,17 @@ def register(sub) -> None:
     p.add_argument("-o", "--output", required=True, help="output EXR (linear float32 RGB)")
     p.add_argument("--spp", type=int, default=None, help="samples per pixel (default: the scene's sample_count)")
     p.add_argument("--seed", type=int, default=None, help="sampler seed (default: the scene's, else 0)")
-    p.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
-    p.add_argument(
-        "-D",
-        dest="defines",
-        action="append",
-        default=[],
-        metavar="NAME=VALUE",
-        help="override a <default> of the scene (repeatable)",
-    )
     p.add_argument("--variance", default=None, metavar="VAR.EXR", help="also write the per-pixel variance of the mean")
-    p.add_argument("--png", default=None, help="PNG preview path (default: the EXR path with .png)")
-    p.add_argument("--exposure", type=float, default=0.0, help="PNG preview exposure in stops (default 0)")
-    p.add_argument("--quiet", action="store_true", help="no progress bar or summary")
+    add_scene_options(p)
     p.set_defaults(func=run)
 
 
 def run(args) -> int:
-    from .. import ParameterError, _core
+    from .. import _core
     from ..render import _defines_list
 
-    if args.spp is not None and args.spp < 1:
-        raise ParameterError(f"--spp {args.spp}: need at least 1 sample per pixel")
-    if args.threads is not None and args.threads < 1:
-        raise ParameterError(f"--threads {args.threads}: need at least 1 thread")
+    out, png = check_scene_options(args, {"--variance": args.variance})
     defines = _defines_list(args.defines)
-    out = Path(args.output)
-    png = Path(args.png) if args.png else out.with_suffix(".png")
     t0 = time.perf_counter()
     img, var, done, interrupted = _core.render_scene(
         args.scene,

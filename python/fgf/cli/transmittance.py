@@ -15,11 +15,11 @@ written atomically (a temporary file in the same folder, then renamed).
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
 import sys
-import tempfile
+
+from .._atomic import write_atomic
 
 PLOT_EXTS = (".png", ".pdf", ".svg")
 TABLE_EXTS = (".csv",)
@@ -86,37 +86,16 @@ def _columns(m, e, t):
     }
 
 
-def _atomic_target(path: str):
-    """A temporary file next to ``path`` (same folder, same extension)."""
-    folder = os.path.dirname(os.path.abspath(path))
-    if not os.path.isdir(folder):
-        raise FileNotFoundError(f"output folder does not exist: {folder}")
-    fd, tmp = tempfile.mkstemp(dir=folder, prefix=".fgf-", suffix=os.path.splitext(path)[1])
-    os.close(fd)
-    return tmp
-
-
-def _write_atomically(path: str, write) -> None:
-    tmp = _atomic_target(path)
-    try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.remove(tmp)
-        raise
-
-
 def _write_csv(path: str, cols: dict) -> None:
     import numpy as np
 
     names = list(cols)
     data = np.column_stack([cols[n] for n in names])
 
-    def write(tmp):
-        np.savetxt(tmp, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
+    def write(fh):
+        np.savetxt(fh, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
 
-    _write_atomically(path, write)
+    write_atomic(path, write)
 
 
 def _write_plot(path: str, m, e, t, title: str) -> None:
@@ -142,11 +121,13 @@ def _write_plot(path: str, m, e, t, title: str) -> None:
         ax.legend()
     fig.suptitle(title)
 
-    def write(tmp):
-        fig.savefig(tmp)
+    fmt = os.path.splitext(path)[1].lstrip(".").lower()
+
+    def write(fh):
+        fig.savefig(fh, format=fmt)
 
     try:
-        _write_atomically(path, write)
+        write_atomic(path, write)
     finally:
         plt.close(fig)
 

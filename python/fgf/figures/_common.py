@@ -9,12 +9,12 @@ arrange, average and plot what it returns.
 from __future__ import annotations
 
 import dataclasses
-import os
-import tempfile
 from pathlib import Path
 from typing import Any, Callable
 
 import numpy as np
+
+from .._atomic import write_atomic  # noqa: F401  (used by the figure modules)
 
 
 class Unavailable(RuntimeError):
@@ -77,33 +77,6 @@ def save_figure(fig, out: Path, name: str) -> str:
     the same directory, then ``os.replace``): an interrupted run never leaves
     a half-written PNG and never destroys a previous one."""
     return write_atomic(out / name, lambda fh: fig.savefig(fh, format="png", dpi=fig.dpi))
-
-
-def write_atomic(path: Path, write: Callable[[Any], None], mode: str = "wb") -> str:
-    """Write ``path`` through ``write(file_handle)`` into a temporary file in
-    the same directory, then rename it into place."""
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    try:
-        with os.fdopen(fd, mode) as fh:
-            write(fh)
-        # mkstemp creates the file private (0600); give it the permissions a
-        # plain open() would have (0666 minus the umask).
-        os.chmod(tmp, 0o666 & ~_umask())
-        os.replace(tmp, path)
-    except BaseException:
-        try:
-            os.unlink(tmp)
-        except FileNotFoundError:
-            pass
-        raise
-    return path.name
-
-
-def _umask() -> int:
-    """The process umask (read by setting and restoring it)."""
-    mask = os.umask(0o022)
-    os.umask(mask)
-    return mask
 
 
 def new_figure(width: float, height: float):

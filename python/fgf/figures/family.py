@@ -86,13 +86,11 @@ def _covariance_images(ctx: Context, res: dict) -> Figure:
             tau = _paths(need("sample_optical_depth")(n_paths, n, 1.0, hurst, sw, seed, progress=False))
             real = np.diff(tau, axis=1) * n
             label = f"pink noise, H = {hurst}"
-            what = "cell averages (n = %d)" % n
         else:
             x = np.arange(1, n + 1) / n
             cov = kfbm_covariance(hurst, sw, x[:, None], x[None, :])
             real = _paths(need("sample_kfbm_1d")(n_paths, n, 1.0, hurst, sw, seed, progress=False))[:, 1:]
             label = f"{int(np.ceil(hurst))}-fBm, H = {hurst}"
-            what = "points x_i = i/%d" % n
         emp = real.T @ real / real.shape[0]  # the mean is 0 by construction
         rel = float(np.linalg.norm(emp - cov) / np.linalg.norm(cov))
         # Expected size of that error for Gaussian paths:

@@ -22,7 +22,9 @@
 //! (Householder's 4th-order steps, tolerance [`SURFACE_TOL`](super::SURFACE_TOL),
 //! started from a polynomial fit of the root made in the constructor: one
 //! evaluation per sample for typical parameters) and `T_ms(t) = 1-u` (Halley,
-//! [`MEDIUM_TOL`](super::MEDIUM_TOL)); at most
+//! [`MEDIUM_TOL`](super::MEDIUM_TOL), started from a per-model polynomial fit
+//! of `ln t` against `ln(-ln(1-u))`: also one evaluation for typical
+//! parameters); at most
 //! [`SAMPLE_MAX_ITER`](super::SAMPLE_MAX_ITER) iterations, bisection as the
 //! fallback inside the bracket. For white noise `p(0) = σ̄ = σ_eff`, not
 //! `σ_m`.

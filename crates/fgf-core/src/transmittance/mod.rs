@@ -140,8 +140,8 @@ pub const BISECT_TOL: f64 = 1e-12;
 /// Iteration cap of the root finders: bisection alone needs at most
 /// `log2(1460 / 1e-12) ≈ 51` halvings of the widest bracket
 /// `[S_MIN, S_MAX]`, plus at most 11 doubling steps to find it, so 100
-/// bounds every case; typical samples take 2–3 (surface) or 3–5 (medium)
-/// evaluations.
+/// bounds every case; typical samples take one evaluation from the fitted
+/// starts (`StartGuess`, `MediumGuess`), 2–5 without them.
 pub const SAMPLE_MAX_ITER: u32 = 100;
 /// `ln t` below which `t` underflows to 0 and above which it overflows.
 const S_MIN: f64 = -745.2;

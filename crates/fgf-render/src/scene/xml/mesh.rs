@@ -12,11 +12,21 @@
 //!   other elements and properties are skipped.
 //!
 //! Normals are kept only if every vertex has one; they are normalised.
+//!
+//! Meshes without vertex normals get Mitsuba's smooth ones from
+//! [`smooth_vertex_normals`] (user docs: the `plugins` module). Mitsuba
+//! (`Mesh::recompute_vertex_normals`, after Thürmer and Wüthrich 1998)
+//! weights each unit face normal by the face's angle at the vertex, on the
+//! world-space positions; angle weighting is not invariant under
+//! non-uniform scale or shear, so we compute in world space too and store
+//! `normalize(Mᵀ n_world)`, which the renderer's `M^{-T}` maps back onto
+//! `n_world`.
 
 use super::document::XNode;
 use crate::scene::desc::TriangleMesh;
 use crate::scene::error::{SceneError, SceneErrorKind};
-use glam::Vec3;
+use glam::{Mat3, Mat4, Vec3};
+use std::collections::HashMap;
 use std::path::Path;
 
 fn read_file(fnode: &XNode, path: &Path, what: &str) -> Result<Vec<u8>, SceneError> {
@@ -70,6 +80,69 @@ fn finish(
     })
 }
 
+/// Angle between two unit vectors, accurate for small and large angles
+/// (`acos` of the dot product loses half the digits near 0 and π): the
+/// chord `|a − b|` gives the angle through `2 asin(|a − b| / 2)`, and the
+/// supplement is used past π/2, as Mitsuba's `unit_angle` does.
+fn unit_angle(a: Vec3, b: Vec3) -> f32 {
+    if a.dot(b) >= 0.0 {
+        2.0 * (0.5 * (b - a).length()).asin()
+    } else {
+        std::f32::consts::PI - 2.0 * (0.5 * (a + b).length()).asin()
+    }
+}
+
+/// Smooth vertex normals of a mesh that has none, computed as Mitsuba 3.9
+/// does (see the module docs): angle-weighted unit face normals in world
+/// space, degenerate faces skipped, `(1, 0, 0)` for a zero sum. Returns
+/// local-space unit normals `normalize(Mᵀ n_world)`, which the renderer's
+/// inverse-transpose maps back onto `n_world`.
+pub(crate) fn smooth_vertex_normals(
+    positions: &[Vec3],
+    indices: &[[u32; 3]],
+    to_world: &Mat4,
+) -> Vec<Vec3> {
+    // f32 throughout, like Mitsuba's scalar loader, so that the results
+    // agree to float rounding.
+    let world: Vec<Vec3> = positions
+        .iter()
+        .map(|&p| to_world.transform_point3(p))
+        .collect();
+    let mut sums = vec![Vec3::ZERO; positions.len()];
+    for t in indices {
+        let v = [
+            world[t[0] as usize],
+            world[t[1] as usize],
+            world[t[2] as usize],
+        ];
+        let n = (v[1] - v[0]).cross(v[2] - v[0]);
+        let len2 = n.length_squared();
+        // A zero (or non-finite) cross product: no orientation, no weight.
+        if !(len2 > 0.0 && len2.is_finite()) {
+            continue;
+        }
+        let n = n / len2.sqrt();
+        for j in 0..3 {
+            let d0 = (v[(j + 1) % 3] - v[j]).normalize();
+            let d1 = (v[(j + 2) % 3] - v[j]).normalize();
+            sums[t[j] as usize] += n * unit_angle(d0, d1);
+        }
+    }
+    let to_local = Mat3::from_mat4(*to_world).transpose();
+    sums.into_iter()
+        .map(|s| {
+            let len = s.length();
+            // Mitsuba's placeholder for a vertex without a usable face.
+            let nw = if len != 0.0 && len.is_finite() {
+                s / len
+            } else {
+                Vec3::X
+            };
+            (to_local * nw).normalize_or(Vec3::X)
+        })
+        .collect()
+}
+
 pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, SceneError> {
     // Read the bytes ourselves so that a missing file is an I/O error with
     // the OS message, then let tobj parse from memory (no .mtl lookups).
@@ -94,23 +167,54 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
     let mut normals = Vec::new();
     let mut all_normals = true;
     let mut indices = Vec::new();
+    // tobj numbers the vertices of each `o`/`g` group separately, while
+    // Mitsuba shares one `v/vt/vn` vertex across groups (it matters for the
+    // computed smooth normals). tobj does not report the file's indices, so
+    // a vertex is shared with an earlier group when its position, texture
+    // coordinate and normal are bitwise equal; within one group tobj's own
+    // index-based numbering is kept.
+    type Key = ([u32; 3], [u32; 2], [u32; 3]);
+    let mut earlier: HashMap<Key, u32> = HashMap::new();
     for m in &models {
         let mesh = &m.mesh;
-        let base = positions.len();
         let nv = mesh.positions.len() / 3;
-        positions.extend(
-            mesh.positions
-                .chunks_exact(3)
-                .map(|c| Vec3::new(c[0], c[1], c[2])),
-        );
-        if mesh.normals.len() == mesh.positions.len() {
-            normals.extend(
-                mesh.normals
-                    .chunks_exact(3)
-                    .map(|c| Vec3::new(c[0], c[1], c[2])),
+        let has_n = mesh.normals.len() == mesh.positions.len();
+        let has_tc = mesh.texcoords.len() == 2 * nv;
+        all_normals &= has_n;
+        let mut ids = Vec::with_capacity(nv);
+        let mut mine: Vec<(Key, u32)> = Vec::with_capacity(nv);
+        for i in 0..nv {
+            let p = Vec3::from_slice(&mesh.positions[3 * i..3 * i + 3]);
+            let n = if has_n {
+                Vec3::from_slice(&mesh.normals[3 * i..3 * i + 3])
+            } else {
+                Vec3::ZERO
+            };
+            let tc = if has_tc {
+                [mesh.texcoords[2 * i], mesh.texcoords[2 * i + 1]]
+            } else {
+                [0.0; 2]
+            };
+            let key = (
+                p.to_array().map(f32::to_bits),
+                tc.map(f32::to_bits),
+                n.to_array().map(f32::to_bits),
             );
-        } else {
-            all_normals = false;
+            let id = match earlier.get(&key) {
+                Some(&id) => id,
+                None => {
+                    let id = u32::try_from(positions.len())
+                        .map_err(|_| fmt("more than 2^32 vertices".into()))?;
+                    positions.push(p);
+                    normals.push(n);
+                    mine.push((key, id));
+                    id
+                }
+            };
+            ids.push(id);
+        }
+        for (key, id) in mine {
+            earlier.entry(key).or_insert(id);
         }
         for t in mesh.indices.chunks_exact(3) {
             if t.iter().any(|&i| i as usize >= nv) {
@@ -119,10 +223,7 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
                     m.name
                 )));
             }
-            let off = |i: u32| -> Result<u32, SceneError> {
-                u32::try_from(base + i as usize).map_err(|_| fmt("more than 2^32 vertices".into()))
-            };
-            indices.push([off(t[0])?, off(t[1])?, off(t[2])?]);
+            indices.push([ids[t[0] as usize], ids[t[1] as usize], ids[t[2] as usize]]);
         }
     }
     finish(

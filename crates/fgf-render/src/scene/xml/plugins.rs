@@ -8,11 +8,43 @@
 //! | `sampler` | `independent` | `sample_count` (4, ≥ 1), `seed` (0, ≥ 0) |
 //! | `film` | `hdrfilm` | `width` (768), `height` (576): 1..=65536 each and at most 2^26 pixels; `pixel_format` (`rgb`, `rgba`); `component_format` and `file_format` accepted and ignored (output is float32 EXR); cropping is not supported; nested `rfilter`. |
 //! | `rfilter` | `box`, `gaussian`, `tent` | gaussian `stddev` (0.5, > 0); tent `radius` (1, > 0). Default: gaussian. |
-//! | `shape` | `cube`, `rectangle`, `disk`, `sphere`, `obj`, `ply` | `to_world`, `flip_normals` (false); sphere `center` (0,0,0), `radius` (1, > 0); obj/ply `filename` (required), `face_normals` (false). Nested: one `bsdf` (default diffuse 0.5), one `area` emitter, media named `interior` / `exterior`. |
+//! | `shape` | `cube`, `rectangle`, `disk`, `sphere`, `obj`, `ply` | `to_world`, `flip_normals` (false); sphere `center` (0,0,0), `radius` (1, > 0); obj/ply `filename` (required), `face_normals` (false: a mesh without vertex normals gets Mitsuba's smooth, angle-weighted ones, see below; true: flat shading, the file's normals are ignored). Nested: one `bsdf` (default: diffuse 0.5, but diffuse 0 — black — on a shape with an `area` emitter, as in Mitsuba), one `area` emitter, media named `interior` / `exterior`. |
 //! | `bsdf` | `diffuse`, `null`, `dielectric`, `conductor`, `twosided` | diffuse `reflectance` (0.5, in \[0, 1\]); dielectric `int_ior` ("bk7"), `ext_ior` ("air"), numbers > 0 or names from Mitsuba's table, `specular_reflectance` (1), `specular_transmittance` (1); conductor `material` ("none" = perfect mirror, or a Mitsuba name such as "Au") or `eta` (0) and `k` (1), `specular_reflectance` (1); twosided: one nested BSDF. |
 //! | `emitter` | `area` (in a shape), `point`, `spot`, `directional`, `constant` | area `radiance` (1); point `intensity` (1), `position` or `to_world`; spot `intensity` (1), `to_world`, `cutoff_angle` (20°, in (0, 180)), `beam_width` (0.75·cutoff, in [0, cutoff]); directional `irradiance` (1), `direction` or `to_world` (local +z); constant `radiance` (1). Colours ≥ 0. |
 //!
 //! Media, volumes and phase functions: see [`super::media`].
+//!
+//! # Two shape defaults that change images (as in Mitsuba 3.9)
+//!
+//! **Emitters are black.** A shape without a `bsdf` gets a `diffuse` BSDF
+//! of reflectance 0.5, except when it carries an `area` emitter: then the
+//! reflectance is 0, so the light source emits but reflects nothing. Give
+//! the emitter an explicit `bsdf` to make it reflect.
+//!
+//! ```xml
+//! <shape type="rectangle">
+//!     <emitter type="area"><rgb name="radiance" value="10"/></emitter>
+//!     <!-- no <bsdf>: black diffuse (reflectance 0) -->
+//! </shape>
+//! ```
+//!
+//! **Meshes without normals are smooth.** An `obj`/`ply` whose file has no
+//! vertex normals gets computed ones, unless `face_normals="true"` (flat
+//! shading; then the file's normals are ignored too). The normal at a
+//! vertex is the normalised sum of the unit normals of the faces around
+//! it, each weighted by the face's interior angle at that vertex (angle
+//! weighting, not area weighting), computed on the world-space positions
+//! (after `to_world`). Degenerate faces (zero area) are skipped; a vertex
+//! with only degenerate faces gets the normal (1, 0, 0) in world space,
+//! like Mitsuba's placeholder. An OBJ vertex is a distinct `v/vt/vn`
+//! triple, so a texture seam splits the smoothing as in Mitsuba.
+//!
+//! ```xml
+//! <shape type="obj">
+//!     <string name="filename" value="meshes/octahedron.obj"/>
+//!     <boolean name="face_normals" value="true"/>  <!-- keep it faceted -->
+//! </shape>
+//! ```
 
 use super::document::XNode;
 use super::media;
@@ -38,6 +70,9 @@ pub(crate) struct Ctx<'a> {
     pub bsdfs: Vec<BsdfDesc>,
     bsdf_by_id: HashMap<String, BsdfId>,
     default_bsdf: Option<BsdfId>,
+    /// The black diffuse BSDF of emitters without a BSDF (shared, like
+    /// `default_bsdf`).
+    default_emitter_bsdf: Option<BsdfId>,
     pub media: Vec<MediumDesc>,
     pub medium_by_id: HashMap<String, MediumId>,
     /// The element each medium was defined by (for deferred errors).
@@ -87,6 +122,7 @@ pub(crate) fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, Sc
         bsdfs: Vec::new(),
         bsdf_by_id: HashMap::new(),
         default_bsdf: None,
+        default_emitter_bsdf: None,
         media: Vec::new(),
         medium_by_id: HashMap::new(),
         medium_nodes: Vec::new(),
@@ -576,6 +612,13 @@ fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDesc, SceneErr
             };
             if face_normals {
                 m.normals = None;
+            } else if m.normals.is_none() {
+                // Mitsuba's smooth normals (angle-weighted, world space).
+                m.normals = Some(mesh::smooth_vertex_normals(
+                    &m.positions,
+                    &m.indices,
+                    &to_world,
+                ));
             }
             GeometryDesc::Mesh(Arc::new(m))
         }
@@ -588,8 +631,8 @@ fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDesc, SceneErr
         )));
     }
     let bsdf = match bsdfs.first() {
-        Some(e) => bsdf_ref(ctx, e)?,
-        None => default_bsdf(ctx),
+        Some(e) => Some(bsdf_ref(ctx, e)?),
+        None => None,
     };
     let emitters = p.take_objects("emitter");
     if emitters.len() > 1 {
@@ -606,6 +649,8 @@ fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDesc, SceneErr
         }
         None => None,
     };
+    // The default depends on whether the shape emits (see `default_bsdf`).
+    let bsdf = bsdf.unwrap_or_else(|| default_bsdf(ctx, emitter.is_some()));
     let interior = match p.take_object_named("medium", "interior") {
         Some(e) => Some(media::medium_ref(ctx, e)?),
         None => None,
@@ -640,12 +685,19 @@ fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDesc, SceneErr
     })
 }
 
-/// Mitsuba gives a shape without a BSDF a diffuse BSDF of reflectance 0.5;
-/// all such shapes share one entry.
-fn default_bsdf(ctx: &mut Ctx) -> BsdfId {
-    *ctx.default_bsdf.get_or_insert_with(|| {
+/// The BSDF of a shape without one, as Mitsuba 3.9's `Shape` constructor
+/// chooses it: a diffuse BSDF of reflectance 0.5, except on a shape with an
+/// (area) emitter, which gets reflectance 0 so that a light source does not
+/// also reflect light. All such shapes share one entry per kind.
+fn default_bsdf(ctx: &mut Ctx, emits: bool) -> BsdfId {
+    let (slot, reflectance) = if emits {
+        (&mut ctx.default_emitter_bsdf, 0.0)
+    } else {
+        (&mut ctx.default_bsdf, 0.5)
+    };
+    *slot.get_or_insert_with(|| {
         ctx.bsdfs.push(BsdfDesc::Diffuse {
-            reflectance: [0.5; 3],
+            reflectance: [reflectance; 3],
         });
         ctx.bsdfs.len() - 1
     })

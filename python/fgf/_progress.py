@@ -1,0 +1,68 @@
+"""Progress plumbing and argument checks shared by the long-running Python APIs.
+
+``progress=`` in the public API takes ``True`` (a tqdm bar, shown only when
+stderr is a terminal), ``False``/``None`` (quiet), a tqdm-like object with
+``update(n)``, or a ``callable(done, total)``; :func:`progress_sink` turns
+that into what ``fgf._core`` accepts.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import sys
+
+import numpy as np
+
+from . import _core
+
+
+class _TqdmOnFirstCall:
+    """A ``progress(done, total)`` callable that opens a tqdm bar lazily."""
+
+    def __init__(self, desc: str) -> None:
+        self.desc = desc
+        self.bar = None
+        self.last = 0
+
+    def __call__(self, done: int, total: int) -> None:
+        if self.bar is None:
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, unit_scale=True, desc=self.desc, file=sys.stderr)
+        self.bar.update(done - self.last)
+        self.last = done
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+@contextlib.contextmanager
+def progress_sink(progress, desc: str):
+    """Yield the ``progress`` object to hand to ``_core``; close any bar on exit."""
+    if progress is True:
+        if not sys.stderr.isatty():
+            yield None
+            return
+        bar = _TqdmOnFirstCall(desc)
+        try:
+            yield bar
+        finally:
+            bar.close()
+    else:
+        yield None if progress is False else progress
+
+
+def check_int(name: str, value, lo: int, hi: int) -> int:
+    """``value`` as an int in ``[lo, hi]``, else ``fgf.ParameterError`` naming ``name``."""
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= int(value) <= hi:
+        raise _core.ParameterError(f"invalid {name} = {value!r}: must be an integer in [{lo}, {hi}]")
+    return int(value)
+
+
+SEED_MAX = 2**64 - 1
+
+
+def check_seed(seed) -> int:
+    """A seed is an integer in [0, 2^64 - 1]."""
+    return check_int("seed", seed, 0, SEED_MAX)
