@@ -495,8 +495,9 @@ fn invalid_parameters_are_rejected_by_name() {
 fn models_are_copy_and_small() {
     fn is_copy<T: Copy>() {}
     is_copy::<Model>();
-    // 14 polynomial coefficients of the pink sampler's starting point
-    // (`StartGuess`, ~130 bytes) dominate; the renderer keeps one `Model`
+    // The pink samplers' fitted starting points dominate: 14 f64 coefficients
+    // for surface starts (`StartGuess`) and 12 f32 for medium starts
+    // (`MediumGuess`); the model sits exactly at 256 bytes. The renderer keeps one `Model`
     // per channel, so a few hundred bytes is fine, a heap table would not be.
     let size = std::mem::size_of::<Model>();
     assert!(size <= 256, "size_of::<Model>() = {size}");

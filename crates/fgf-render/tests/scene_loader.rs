@@ -629,6 +629,8 @@ fn meshes_dir() -> PathBuf {
 /// space is off by 1e-2 or more in every case below.
 const NORMAL_TOL: f32 = 2e-6;
 
+// Mitsuba's printed digits, copied as printed.
+#[allow(clippy::excessive_precision)]
 #[test]
 fn meshes_without_normals_get_angle_weighted_smooth_normals_by_hand() {
     let dir = tempfile::tempdir().unwrap();
@@ -699,6 +701,8 @@ fn meshes_without_normals_get_angle_weighted_smooth_normals_by_hand() {
     }
 }
 
+// Mitsuba's printed digits, copied as printed.
+#[allow(clippy::excessive_precision)]
 #[test]
 fn smooth_normals_match_mitsuba_in_world_space_under_nonuniform_transforms() {
     let dir = meshes_dir();
@@ -778,6 +782,31 @@ fn smooth_normals_match_mitsuba_in_world_space_under_nonuniform_transforms() {
         GeometryDesc::Mesh(m) => assert!(m.normals.is_none()),
         _ => panic!(),
     }
+}
+
+// Mitsuba's printed digits, copied as printed.
+#[allow(clippy::excessive_precision)]
+#[test]
+fn rotate_uses_the_axis_unnormalised_like_mitsuba() {
+    // Mitsuba 3.9.1: mi.ScalarTransform4f().rotate([0.3, -1.7, 2.2], 37),
+    // which is what <rotate> builds (a unit-axis rotation only if |a| = 1).
+    let s = ok(
+        r#"<shape type="cube"><transform name="to_world"><rotate x="0.3" y="-1.7" z="2.2" angle="37"/></transform></shape>
+<shape type="cube"><transform name="to_world"><rotate y="1" angle="30"/></transform></shape>"#,
+    );
+    let expected = Mat4::from_cols(
+        Vec4::new(0.8167583, 1.221297, 1.1559861, 0.0),
+        Vec4::new(-1.4266889, 1.380579, -0.5725588, 0.0),
+        Vec4::new(-0.8901849, -0.9336478, 1.7732397, 0.0),
+        Vec4::W,
+    );
+    mat_close(s.shapes[0].to_world, expected, 1e-6);
+    // A unit axis is an ordinary rotation.
+    mat_close(
+        s.shapes[1].to_world,
+        Mat4::from_rotation_y(30f32.to_radians()),
+        1e-6,
+    );
 }
 
 #[test]
@@ -1629,7 +1658,17 @@ fn random_transform_chains_compose_in_mitsuba_order() {
                         "<rotate value=\"{} {} {}\" angle=\"{angle}\"/>",
                         axis.x, axis.y, axis.z
                     );
-                    glam::DMat4::from_axis_angle(axis.normalize(), angle.to_radians())
+                    // Mitsuba does not normalise the axis: c I + (1-c) a a^T + s [a]x.
+                    let (sn, cs) = angle.to_radians().sin_cos();
+                    let outer = glam::DMat3::from_cols(axis * axis.x, axis * axis.y, axis * axis.z);
+                    let cross = glam::DMat3::from_cols(
+                        glam::DVec3::new(0.0, axis.z, -axis.y),
+                        glam::DVec3::new(-axis.z, 0.0, axis.x),
+                        glam::DVec3::new(axis.y, -axis.x, 0.0),
+                    );
+                    glam::DMat4::from_mat3(
+                        glam::DMat3::IDENTITY * cs + outer * (1.0 - cs) + cross * sn,
+                    )
                 }
                 _ => {
                     let m: Vec<f64> = (0..12).map(|_| rng.random_range(-2.0..2.0)).collect();

@@ -6,6 +6,10 @@
 //! * `<translate x y z/>` (missing components 0) or `value="x, y, z"`.
 //! * `<rotate x y z angle/>` or `value="ax, ay, az" angle`: a rotation by
 //!   `angle` degrees, counter-clockwise about the axis (right-hand rule).
+//!   Give a unit axis: like Mitsuba 3.9, the axis `a` is *not* normalised,
+//!   the matrix is `cos θ·I + (1 − cos θ)·a aᵀ + sin θ·[a]×`, which for a
+//!   non-unit axis also scales and shears (Mitsuba maps (1, 0, 0) by
+//!   `rotate x="1" y="1" angle="30"` to (1, 0.134, −0.5)).
 //! * `<scale value="s"/>` (uniform), `value="sx, sy, sz"`, or `x y z`
 //!   (missing components 1).
 //! * `<matrix value="16 numbers, row-major"/>`.
@@ -17,6 +21,22 @@ use super::document::XNode;
 use super::props::{parse_list, xyz_or_value};
 use crate::scene::error::SceneError;
 use glam::{DMat4, DVec3, DVec4};
+
+/// Mitsuba 3.9's rotation matrix about `a` by `theta` radians, with `a` used
+/// as given (not normalised): `cos θ·I + (1 − cos θ)·a aᵀ + sin θ·[a]×`. For
+/// a unit axis this is the usual rotation.
+fn mitsuba_rotate(a: DVec3, theta: f64) -> DMat4 {
+    let (s, c) = theta.sin_cos();
+    let k = 1.0 - c;
+    // Columns of the 3x3 part: column j is c·e_j + k·a_j·a + s·(a × e_j).
+    let col = |e: DVec3, aj: f64| (c * e + k * aj * a + s * a.cross(e)).extend(0.0);
+    DMat4::from_cols(
+        col(DVec3::X, a.x),
+        col(DVec3::Y, a.y),
+        col(DVec3::Z, a.z),
+        DVec4::W,
+    )
+}
 
 pub(crate) fn compose(node: &XNode) -> Result<DMat4, SceneError> {
     let mut m = DMat4::IDENTITY;
@@ -58,7 +78,7 @@ pub(crate) fn compose(node: &XNode) -> Result<DMat4, SceneError> {
                         "rotation axis is zero or not finite (give x, y, z or value=\"ax, ay, az\")",
                     ));
                 }
-                DMat4::from_axis_angle(axis / len, angle.to_radians())
+                mitsuba_rotate(axis, angle.to_radians())
             }
             "matrix" => {
                 c.check_attrs(&["value"])?;
