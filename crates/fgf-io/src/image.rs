@@ -8,14 +8,26 @@
 use crate::{atomic_write, IoError, Result};
 use std::path::Path;
 
-fn check_buffer(path: &Path, width: usize, height: usize, channels: usize, len: usize) -> Result<()> {
+fn check_buffer(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: usize,
+    len: usize,
+) -> Result<()> {
     if width == 0 || height == 0 {
-        return Err(IoError::format(path, format!("cannot write a {width}x{height} image")));
+        return Err(IoError::format(
+            path,
+            format!("cannot write a {width}x{height} image"),
+        ));
     }
     if len != width * height * channels {
         return Err(IoError::format(
             path,
-            format!("buffer has {len} values, a {width}x{height}x{channels} image needs {}", width * height * channels),
+            format!(
+                "buffer has {len} values, a {width}x{height}x{channels} image needs {}",
+                width * height * channels
+            ),
         ));
     }
     Ok(())
@@ -23,7 +35,13 @@ fn check_buffer(path: &Path, width: usize, height: usize, channels: usize, len: 
 
 /// Write a linear float32 EXR with channels `R,G,B` (`channels == 3`) or a
 /// single channel `Y` (`channels == 1`), atomically.
-pub fn write_exr(path: &Path, width: usize, height: usize, channels: usize, data: &[f32]) -> Result<()> {
+pub fn write_exr(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: usize,
+    data: &[f32],
+) -> Result<()> {
     use exr::prelude::*;
     check_buffer(path, width, height, channels, data.len())?;
     let encoding = Encoding {
@@ -108,12 +126,23 @@ pub fn to_srgb8(data: &[f32], exposure: f32) -> Vec<u8> {
 
 /// Write 8-bit PNG (`channels` 1 = grey, 3 = RGB) atomically; `data` is
 /// already encoded.
-pub fn write_png8(path: &Path, width: usize, height: usize, channels: usize, data: &[u8]) -> Result<()> {
+pub fn write_png8(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: usize,
+    data: &[u8],
+) -> Result<()> {
     check_buffer(path, width, height, channels, data.len())?;
     let color = match channels {
         1 => png::ColorType::Grayscale,
         3 => png::ColorType::Rgb,
-        c => return Err(IoError::format(path, format!("PNG output supports 1 or 3 channels, not {c}"))),
+        c => {
+            return Err(IoError::format(
+                path,
+                format!("PNG output supports 1 or 3 channels, not {c}"),
+            ))
+        }
     };
     atomic_write(path, |w| {
         let mut enc = png::Encoder::new(w, width as u32, height as u32);
@@ -126,7 +155,14 @@ pub fn write_png8(path: &Path, width: usize, height: usize, channels: usize, dat
 }
 
 /// Write a linear image as an sRGB PNG preview (exposure in stops).
-pub fn write_png_preview(path: &Path, width: usize, height: usize, channels: usize, data: &[f32], exposure: f32) -> Result<()> {
+pub fn write_png_preview(
+    path: &Path,
+    width: usize,
+    height: usize,
+    channels: usize,
+    data: &[f32],
+    exposure: f32,
+) -> Result<()> {
     check_buffer(path, width, height, channels, data.len())?;
     write_png8(path, width, height, channels, &to_srgb8(data, exposure))
 }
@@ -151,12 +187,24 @@ mod tests {
     fn png_writes_and_bad_size_leaves_no_file() {
         let dir = tempfile::tempdir().unwrap();
         let p = dir.path().join("a.png");
-        write_png_preview(&p, 2, 2, 3, &[0.0, 0.5, 1.0, 2.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8], 0.0).unwrap();
+        write_png_preview(
+            &p,
+            2,
+            2,
+            3,
+            &[0.0, 0.5, 1.0, 2.0, 0.1, 0.2, 0.3, 0.4, 0.5, 0.6, 0.7, 0.8],
+            0.0,
+        )
+        .unwrap();
         assert!(p.exists());
         let q = dir.path().join("b.png");
         assert!(write_png_preview(&q, 2, 2, 3, &[0.0; 5], 0.0).is_err());
         assert!(!q.exists());
-        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1, "no temp file left behind");
+        assert_eq!(
+            std::fs::read_dir(dir.path()).unwrap().count(),
+            1,
+            "no temp file left behind"
+        );
     }
 
     #[cfg(unix)]
@@ -179,6 +227,9 @@ mod tests {
 
     #[test]
     fn srgb_curve_end_points() {
-        assert_eq!(to_srgb8(&[0.0, 1.0, 5.0, f32::NAN, -1.0], 0.0), vec![0, 255, 255, 0, 0]);
+        assert_eq!(
+            to_srgb8(&[0.0, 1.0, 5.0, f32::NAN, -1.0], 0.0),
+            vec![0, 255, 255, 0, 0]
+        );
     }
 }

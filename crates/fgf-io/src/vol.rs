@@ -59,7 +59,10 @@ pub fn parse_vol(path: &Path, b: &[u8]) -> Result<VolGrid> {
         return Err(err("does not start with the magic bytes 'VOL'".into()));
     }
     if b[3] != 3 {
-        return Err(err(format!("version is {}, only version 3 is supported", b[3])));
+        return Err(err(format!(
+            "version is {}, only version 3 is supported",
+            b[3]
+        )));
     }
     let enc = read_i32(b, 4);
     if enc != 1 {
@@ -67,7 +70,12 @@ pub fn parse_vol(path: &Path, b: &[u8]) -> Result<VolGrid> {
             "encoding is {enc}, only 1 (float32) is supported"
         )));
     }
-    let (nx, ny, nz, nc) = (read_i32(b, 8), read_i32(b, 12), read_i32(b, 16), read_i32(b, 20));
+    let (nx, ny, nz, nc) = (
+        read_i32(b, 8),
+        read_i32(b, 12),
+        read_i32(b, 16),
+        read_i32(b, 20),
+    );
     for (n, v) in [("xres", nx), ("yres", ny), ("zres", nz)] {
         if v <= 0 {
             return Err(err(format!("{n} = {v}, must be >= 1")));
@@ -117,7 +125,11 @@ pub fn read_vol(path: &Path) -> Result<VolGrid> {
 /// Serialise a grid to `.vol` bytes (the exact inverse of [`parse_vol`]).
 pub fn encode_vol(grid: &VolGrid, w: &mut impl Write) -> std::io::Result<()> {
     let [nx, ny, nz] = grid.shape;
-    assert_eq!(grid.data.len(), nx * ny * nz * grid.channels, "grid data size");
+    assert_eq!(
+        grid.data.len(),
+        nx * ny * nz * grid.channels,
+        "grid data size"
+    );
     w.write_all(b"VOL")?;
     w.write_all(&[3u8])?;
     w.write_all(&1i32.to_le_bytes())?;
@@ -147,7 +159,10 @@ pub fn write_vol(path: &Path, grid: &VolGrid) -> Result<()> {
         ));
     }
     if grid.data.len() != nx * ny * nz * grid.channels {
-        return Err(IoError::format(path, "grid data length does not match its shape"));
+        return Err(IoError::format(
+            path,
+            "grid data length does not match its shape",
+        ));
     }
     if nx > i32::MAX as usize || ny > i32::MAX as usize || nz > i32::MAX as usize {
         return Err(IoError::format(path, "grid resolution does not fit in i32"));
@@ -175,7 +190,10 @@ mod tests {
         write_vol(&p, &grid).unwrap();
         assert_eq!(std::fs::metadata(&p).unwrap().len(), 48 + 4 * 72);
         assert_eq!(read_vol(&p).unwrap(), grid);
-        assert_eq!(grid.at(2, 1, 3, 1), grid.data[((3 * 2 + 1) * 3 + 2) * 3 + 1]);
+        assert_eq!(
+            grid.at(2, 1, 3, 1),
+            grid.data[((3 * 2 + 1) * 3 + 2) * 3 + 1]
+        );
     }
 
     #[test]
@@ -204,7 +222,10 @@ mod tests {
         b[3] = 3;
         b[4..8].copy_from_slice(&1i32.to_le_bytes());
         b[8..12].copy_from_slice(&(-2i32).to_le_bytes());
-        assert!(parse_vol(p, &b).unwrap_err().to_string().contains("xres = -2"));
+        assert!(parse_vol(p, &b)
+            .unwrap_err()
+            .to_string()
+            .contains("xres = -2"));
     }
 
     #[test]

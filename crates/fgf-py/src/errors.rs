@@ -6,7 +6,12 @@ use pyo3::create_exception;
 use pyo3::exceptions::{PyOSError, PyValueError};
 use pyo3::PyErr;
 
-create_exception!(_core, FgfError, PyValueError, "Base class of every fgf error.");
+create_exception!(
+    _core,
+    FgfError,
+    PyValueError,
+    "Base class of every fgf error."
+);
 create_exception!(
     _core,
     ParameterError,

@@ -43,8 +43,15 @@ enum Sink {
 }
 
 impl Sink {
-    fn new(py: Python<'_>, progress: Option<&Bound<'_, PyAny>>, total: u64, label: &str) -> PyResult<Self> {
-        let Some(obj) = progress else { return Ok(Sink::Quiet) };
+    fn new(
+        py: Python<'_>,
+        progress: Option<&Bound<'_, PyAny>>,
+        total: u64,
+        label: &str,
+    ) -> PyResult<Self> {
+        let Some(obj) = progress else {
+            return Ok(Sink::Quiet);
+        };
         if obj.is_none() {
             return Ok(Sink::Quiet);
         }

@@ -24,7 +24,12 @@ pub(crate) fn render_err(e: RenderError, source: &str) -> PyErr {
     }
 }
 
-pub(crate) fn to_hw3<'py>(py: Python<'py>, data: Vec<f32>, h: usize, w: usize) -> PyResult<Bound<'py, PyAny>> {
+pub(crate) fn to_hw3<'py>(
+    py: Python<'py>,
+    data: Vec<f32>,
+    h: usize,
+    w: usize,
+) -> PyResult<Bound<'py, PyAny>> {
     Ok(PyArray1::from_vec(py, data).reshape([h, w, 3])?.into_any())
 }
 

@@ -1707,3 +1707,27 @@ fn random_transform_chains_compose_in_mitsuba_order() {
         }
     }
 }
+
+#[test]
+fn a_define_the_scene_never_uses_is_an_error_naming_it() {
+    let xml = r#"<scene version="3.0.0"><default name="spp" value="4"/>
+        <sensor type="perspective"><sampler type="independent"><integer name="sample_count" value="$spp"/></sampler>
+        <film type="hdrfilm"><integer name="width" value="$w"/><integer name="height" value="8"/></film></sensor></scene>"#;
+    let dir = std::path::Path::new(".");
+    let ok = [
+        ("spp".to_string(), "2".to_string()),
+        ("w".to_string(), "8".to_string()),
+    ];
+    assert!(fgf_render::scene::load_str(xml, "t.xml", dir, &ok).is_ok());
+    let typo = [
+        ("w".to_string(), "8".to_string()),
+        ("sps".to_string(), "2".to_string()),
+    ];
+    let e = fgf_render::scene::load_str(xml, "t.xml", dir, &typo)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("t.xml") && e.contains("'sps'") && e.contains("spp"),
+        "{e}"
+    );
+}

@@ -127,7 +127,13 @@ impl Medium {
 
     /// Sample a free flight; see the module docs.
     #[inline]
-    pub fn sample_distance(&self, ray: &Ray, t_max: f32, start: SegmentStart, sampler: &mut Sampler) -> DistanceSample {
+    pub fn sample_distance(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        start: SegmentStart,
+        sampler: &mut Sampler,
+    ) -> DistanceSample {
         // Classical media ignore `start` (and `end` below); non-exponential
         // media choose their kernel with them.
         match self {
@@ -147,17 +153,34 @@ impl Medium {
     /// unlike per-segment mixtures whose products grow with the depth.
     /// Media whose flight pdf does not depend on the channel return `r = 1`.
     #[inline]
-    pub fn sample_distance_spectral(&self, ray: &Ray, t_max: f32, start: SegmentStart, hero: usize, sampler: &mut Sampler) -> (DistanceSample, Spectrum) {
+    pub fn sample_distance_spectral(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        start: SegmentStart,
+        hero: usize,
+        sampler: &mut Sampler,
+    ) -> (DistanceSample, Spectrum) {
         match self {
             Medium::Homogeneous(m) => m.sample_distance_hero(t_max, hero, sampler),
             Medium::NonExp(m) => m.sample_distance_hero(ray, t_max, start, hero, sampler),
-            _ => (self.sample_distance(ray, t_max, start, sampler), Spectrum::ONE),
+            _ => (
+                self.sample_distance(ray, t_max, start, sampler),
+                Spectrum::ONE,
+            ),
         }
     }
 
     /// Transmittance estimate over `[0, t_end]` along `ray`.
     #[inline]
-    pub fn transmittance(&self, ray: &Ray, t_end: f32, start: SegmentStart, end: SegmentEnd, sampler: &mut Sampler) -> Spectrum {
+    pub fn transmittance(
+        &self,
+        ray: &Ray,
+        t_end: f32,
+        start: SegmentStart,
+        end: SegmentEnd,
+        sampler: &mut Sampler,
+    ) -> Spectrum {
         match self {
             Medium::Homogeneous(m) => m.transmittance(t_end),
             Medium::Grid(m) => m.transmittance(ray, t_end, sampler),

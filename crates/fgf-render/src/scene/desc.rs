@@ -108,7 +108,8 @@ pub enum GeometryDesc {
 #[derive(Debug, Clone, PartialEq)]
 pub struct TriangleMesh {
     pub positions: Vec<Vec3>,
-    /// Per-vertex normals, if the file has them (`face_normals=true` drops them).
+    /// Per-vertex normals: the file's, else smooth normals computed by the
+    /// loader as Mitsuba does; `None` with `face_normals=true`.
     pub normals: Option<Vec<Vec3>>,
     pub indices: Vec<[u32; 3]>,
 }
@@ -120,8 +121,9 @@ pub struct ShapeDesc {
     pub geometry: GeometryDesc,
     pub to_world: Mat4,
     pub flip_normals: bool,
-    /// Mitsuba gives a shape with no BSDF a diffuse BSDF of reflectance 0.5;
-    /// the loader makes that explicit, so this is always set.
+    /// Mitsuba gives a shape with no BSDF a diffuse BSDF of reflectance 0.5,
+    /// or 0 if the shape carries an area emitter; the loader makes that
+    /// explicit, so this is always set.
     pub bsdf: BsdfId,
     /// An `area` emitter attached to this shape.
     pub emitter: Option<EmitterDesc>,
@@ -131,15 +133,27 @@ pub struct ShapeDesc {
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum BsdfDesc {
-    Diffuse { reflectance: Rgb },
+    Diffuse {
+        reflectance: Rgb,
+    },
     /// Index-matched boundary: rays pass straight through.
     Null,
     /// Smooth dielectric (`int_ior`, `ext_ior` as numbers; named materials resolved).
-    Dielectric { int_ior: f32, ext_ior: f32, specular_reflectance: Rgb, specular_transmittance: Rgb },
+    Dielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: Rgb,
+        specular_transmittance: Rgb,
+    },
     /// Smooth conductor: complex index `eta + i k` per channel (a named
     /// `material` resolved to RGB; Mitsuba's `none` is a perfect mirror,
     /// encoded as `eta = 0, k = 1` with `perfect_mirror = true`).
-    Conductor { eta: Rgb, k: Rgb, specular_reflectance: Rgb, perfect_mirror: bool },
+    Conductor {
+        eta: Rgb,
+        k: Rgb,
+        specular_reflectance: Rgb,
+        perfect_mirror: bool,
+    },
     /// `twosided`: the nested BSDF on both sides.
     TwoSided(Box<BsdfDesc>),
 }
@@ -152,7 +166,12 @@ pub enum EmitterDesc {
     Point { position: Vec3, intensity: Rgb },
     /// `spot`: `to_world` (looks down local +z), `intensity`, `cutoff_angle`
     /// and `beam_width` in degrees (Mitsuba defaults 20 and 0.75·cutoff).
-    Spot { to_world: Mat4, intensity: Rgb, cutoff_angle: f32, beam_width: f32 },
+    Spot {
+        to_world: Mat4,
+        intensity: Rgb,
+        cutoff_angle: f32,
+        beam_width: f32,
+    },
     /// `directional`: unit `direction` the light travels along, `irradiance`.
     Directional { direction: Vec3, irradiance: Rgb },
     /// `constant`: environment radiance from every direction.
@@ -163,7 +182,9 @@ pub enum EmitterDesc {
 pub enum PhaseDesc {
     Isotropic,
     /// Henyey–Greenstein with mean cosine `g` in (-1, 1).
-    Hg { g: f32 },
+    Hg {
+        g: f32,
+    },
 }
 
 /// A 3D texture: a constant or a `gridvolume`.
@@ -212,7 +233,11 @@ pub enum TransmittanceDesc {
     /// (`hurst > 0`) and always `None` for white and pink noise, and the
     /// parameters were accepted by `fgf_core::transmittance::Fgf::new` for
     /// every channel's `sigma_t`.
-    Fgf { hurst: f64, sw: f64, length: Option<f64> },
+    Fgf {
+        hurst: f64,
+        sw: f64,
+        length: Option<f64>,
+    },
     /// `nonexponential` with `transmittance="exponential"`.
     Exponential,
     /// `nonexponential` with `transmittance="davis"`, parameter `alpha`.
@@ -224,9 +249,18 @@ pub enum TransmittanceDesc {
 #[derive(Debug, Clone)]
 pub enum MediumDesc {
     /// `homogeneous`: `sigma_t` already multiplied by `scale`.
-    Homogeneous { sigma_t: Rgb, albedo: Rgb, phase: PhaseDesc },
+    Homogeneous {
+        sigma_t: Rgb,
+        albedo: Rgb,
+        phase: PhaseDesc,
+    },
     /// `heterogeneous`: `sigma_t(x) = scale * sigma_t_volume(x)`.
-    Heterogeneous { sigma_t: VolumeDesc, albedo: VolumeDesc, scale: f32, phase: PhaseDesc },
+    Heterogeneous {
+        sigma_t: VolumeDesc,
+        albedo: VolumeDesc,
+        scale: f32,
+        phase: PhaseDesc,
+    },
     /// `fgf` and `nonexponential`: mean extinction `sigma_t` (already scaled),
     /// optional macro-scale `density` grid multiplying it.
     NonExponential {

@@ -29,6 +29,11 @@
 //! * Plugins: see [`plugins`] (integrators, sensor, sampler, film, filters,
 //!   shapes, BSDFs, emitters) and [`media`] (media, volumes, phase functions,
 //!   and fgf's non-exponential `fgf` and `nonexponential` media).
+//! * Mitsuba defaults that change images and are easy to miss: a shape
+//!   with an `area` emitter and no `bsdf` is black (diffuse reflectance 0,
+//!   not 0.5); an `obj`/`ply` without vertex normals is smooth-shaded with
+//!   computed angle-weighted normals unless `face_normals="true"` (both in
+//!   [`plugins`]); a `rotate` axis is not normalised (see `transform`).
 //!
 //! # Stages
 //!
@@ -85,6 +90,12 @@ pub fn load_str(
     base_dir: &Path,
     defines: &[(String, String)],
 ) -> Result<SceneDesc, SceneError> {
-    let nodes = document::build(xml, source_name, base_dir, defines)?;
-    plugins::instantiate(&nodes, source_name)
+    let (nodes, unused_define) = document::build(xml, source_name, base_dir, defines)?;
+    let desc = plugins::instantiate(&nodes, source_name)?;
+    // A define the scene never declares nor uses is a typo (`-D kernal=...`);
+    // it is reported after the scene's own errors, which are more specific.
+    match unused_define {
+        Some(e) => Err(e),
+        None => Ok(desc),
+    }
 }

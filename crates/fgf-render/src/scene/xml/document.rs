@@ -3,7 +3,8 @@
 //! Each node remembers its file and line so that later errors can name them.
 
 use crate::scene::error::{SceneError, SceneErrorKind};
-use std::collections::HashMap;
+use std::cell::RefCell;
+use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -101,21 +102,29 @@ struct Builder {
     /// `$name` values: the caller's defines, then `<default>`s for names the
     /// caller did not define.
     params: HashMap<String, String>,
+    /// Names declared by a `<default>` in any file, and names some `$name`
+    /// used: a caller's define in neither is a typo (`-D kernal=...`).
+    declared: HashSet<String>,
+    used: RefCell<HashSet<String>>,
     /// Canonical paths of the files being included (cycle detection).
     stack: Vec<PathBuf>,
     nodes: usize,
 }
 
 /// Parse `xml` (the scene named `source_name`) into the top-level elements of
-/// its `<scene>`, includes spliced in place.
+/// its `<scene>`, includes spliced in place. Also returns the error for the
+/// first caller define that no `<default>` declares and no `$name` uses, for
+/// the caller to report once the scene itself has been checked.
 pub(crate) fn build(
     xml: &str,
     source_name: &str,
     base_dir: &Path,
     defines: &[(String, String)],
-) -> Result<Vec<XNode>, SceneError> {
+) -> Result<(Vec<XNode>, Option<SceneError>), SceneError> {
     let mut b = Builder {
         params: HashMap::new(),
+        declared: HashSet::new(),
+        used: RefCell::new(HashSet::new()),
         stack: Vec::new(),
         nodes: 0,
     };
@@ -136,7 +145,22 @@ pub(crate) fn build(
     let dir = Arc::new(base_dir.to_path_buf());
     let mut out = Vec::new();
     b.file(xml, &file, &dir, &mut out)?;
-    Ok(out)
+    for (k, _) in defines {
+        if !b.declared.contains(k) && !b.used.borrow().contains(k) {
+            let mut known: Vec<&str> = b.declared.iter().map(|s| s.as_str()).collect();
+            known.sort_unstable();
+            let e = SceneError::new(
+                SceneErrorKind::Invalid,
+                source_name,
+                format!(
+                    "define '{k}' is not a parameter of this scene: no <default name=\"{k}\"/> and no ${k} (its defaults: {})",
+                    if known.is_empty() { "none".to_string() } else { known.join(", ") }
+                ),
+            );
+            return Ok((out, Some(e)));
+        }
+    }
+    Ok((out, None))
 }
 
 fn is_ident(s: &str) -> bool {
@@ -230,6 +254,7 @@ impl Builder {
                 if !node.children.is_empty() {
                     return Err(node.err("<default> takes no children"));
                 }
+                self.declared.insert(name.to_string());
                 self.params
                     .entry(name.to_string())
                     .or_insert_with(|| value.to_string());
@@ -403,6 +428,7 @@ impl Builder {
                 continue;
             }
             let name = &after[..len];
+            self.used.borrow_mut().insert(name.to_string());
             match self.params.get(name) {
                 Some(v) => out.push_str(v),
                 None => {
