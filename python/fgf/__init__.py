@@ -9,75 +9,25 @@ Areas:
 * transmittance models and FGF statistics: :class:`Fgf`, :class:`Exponential`,
   :class:`Davis`, :class:`DavisWeinstein`;
 * field synthesis: :func:`synthesize`, :func:`sample_optical_depth`;
-* rendering Mitsuba 3 XML scenes: :func:`render`.
+* rendering Mitsuba 3 XML scenes: :func:`render`, and the explicit-realization
+  ground truth :func:`ensemble`.
 """
 
 from ._core import FgfError, ParameterError, SceneError, __version__
 
 __all__ = ["FgfError", "ParameterError", "SceneError", "__version__"]
 
-# Each area appends its public names below (one import block per area).
-# --- transmittance (issue 2) ---
-from .transmittance import (  # noqa: E402
-    Davis,
-    DavisWeinstein,
-    Exponential,
-    Fgf,
-    TransmittanceModel,
-    binom,
-    c_const,
-    kfbm_point_variance,
-    line_average_variance,
-    s_kf,
-    s_p,
-)
+# Each area's module lists its public names in its own ``__all__``; the
+# package re-exports exactly those.
+from . import ensemble as _ensemble  # noqa: E402
+from . import field as _field  # noqa: E402
+from . import render as _render  # noqa: E402
+from . import transmittance as _transmittance  # noqa: E402
+from .ensemble import *  # noqa: E402,F401,F403
+from .field import *  # noqa: E402,F401,F403
+from .render import *  # noqa: E402,F401,F403
+from .transmittance import *  # noqa: E402,F401,F403
 
-__all__ += [
-    "Exponential",
-    "Fgf",
-    "Davis",
-    "DavisWeinstein",
-    "TransmittanceModel",
-    "line_average_variance",
-    "c_const",
-    "s_p",
-    "s_kf",
-    "binom",
-    "kfbm_point_variance",
-]
-# --- field (issue 3) ---
-from .field import (  # noqa: E402
-    covariance,
-    discrete_spectral_variance,
-    line_average_second_moment,
-    padded_shape,
-    radial_power_spectrum,
-    sample_kfbm_1d,
-    sample_optical_depth,
-    save_field,
-    sw_3d_for_ray_statistics,
-    synthesize,
-    variogram,
-)
-
-__all__ += [
-    "synthesize",
-    "sample_optical_depth",
-    "sample_kfbm_1d",
-    "sw_3d_for_ray_statistics",
-    "discrete_spectral_variance",
-    "padded_shape",
-    "variogram",
-    "covariance",
-    "radial_power_spectrum",
-    "line_average_second_moment",
-    "save_field",
-]
-# --- render (issue 4/5) ---
-from .render import render, write_exr, write_png  # noqa: E402
-
-__all__ += ["render", "write_exr", "write_png"]
-# --- ensemble (issue 5) ---
-from .ensemble import ensemble  # noqa: E402
-
-__all__ += ["ensemble"]
+for _area in (_transmittance, _field, _render, _ensemble):
+    __all__ += _area.__all__
+del _area
