@@ -24,7 +24,11 @@ def write_atomic(path: str | os.PathLike, write: Callable[[Any], None], mode: st
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise FileNotFoundError(f"{path}: output directory {folder} does not exist")
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    try:
+        fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
+    except OSError as e:
+        # Name the user's file, not the temporary one we failed to create.
+        raise OSError(e.errno, f"{path}: cannot write ({e.strerror})") from None
     try:
         with os.fdopen(fd, mode) as fh:
             write(fh)
