@@ -302,6 +302,40 @@ impl GridMedium {
     /// Returns the `Break` value if `f` stopped early. `o`, `d` are the ray in
     /// unit-cube coordinates (same parameter `t` as in the world).
     #[inline]
+    /// The tentative collisions of majorant-driven tracking along the
+    /// unit-space ray `o + t d`, `t < t_max`: exponential steps of unit
+    /// optical depth in the local majorant `μ` of each DDA cell. At each one
+    /// `f(t, μ, sampler)` decides: `Break` ends the walk, `Continue` draws the
+    /// next step (after `f`'s own draws). Delta tracking (distance sampling)
+    /// and ratio tracking (transmittance) differ only in `f`.
+    fn track<B>(
+        &self,
+        o: Vec3,
+        d: Vec3,
+        t_max: f32,
+        s: &mut Sampler,
+        mut f: impl FnMut(f32, f32, &mut Sampler) -> ControlFlow<B>,
+    ) -> ControlFlow<B> {
+        // Remaining optical depth (in majorant units) to the next tentative collision.
+        let mut tau = -(1.0 - s.next_1d()).ln();
+        self.walk(o, d, t_max, |t0, t1, mu| {
+            if mu <= 0.0 {
+                return ControlFlow::Continue(());
+            }
+            let mut t = t0;
+            loop {
+                let dt = tau / mu;
+                if t + dt >= t1 {
+                    tau -= mu * (t1 - t);
+                    return ControlFlow::Continue(());
+                }
+                t += dt;
+                f(t, mu, s)?;
+                tau = -(1.0 - s.next_1d()).ln();
+            }
+        })
+    }
+
     fn walk<B>(
         &self,
         o: Vec3,
@@ -377,49 +411,34 @@ impl GridMedium {
         let d = self.sigma_t.to_unit.transform_vector3(ray.d);
         let mut weight = Spectrum::ONE;
         let grey = self.sigma_t.channels == 1;
-        // Remaining optical depth (in majorant units) to the next tentative collision.
-        let mut tau = -(1.0 - s.next_1d()).ln();
-        let r = self.walk(o, d, t_max, |t0, t1, mu| {
-            if mu <= 0.0 {
-                return ControlFlow::Continue(());
-            }
-            let mut t = t0;
-            loop {
-                let dt = tau / mu;
-                if t + dt >= t1 {
-                    tau -= mu * (t1 - t);
-                    return ControlFlow::Continue(());
-                }
-                t += dt;
-                if grey {
-                    // Classical delta tracking: real with probability σ_t/μ, weight = albedo.
-                    let sig = self.sigma_t.eval_unit_scalar(o + d * t) * self.scale;
-                    if s.next_1d() * mu < sig {
-                        weight *= match &self.albedo {
-                            Albedo::Constant(a) => *a,
-                            Albedo::Grid(g) => g.eval_world(ray.at(t)),
-                        };
-                        return ControlFlow::Break(t);
-                    }
-                    tau = -(1.0 - s.next_1d()).ln();
-                    continue;
-                }
-                let sig = self.sigma_t_unit(o + d * t);
-                let p_real = mean(sig) / mu;
-                if s.next_1d() < p_real {
-                    let albedo = match &self.albedo {
+        let r = self.track(o, d, t_max, s, |t, mu, s| {
+            if grey {
+                // Classical delta tracking: real with probability σ_t/μ, weight = albedo.
+                let sig = self.sigma_t.eval_unit_scalar(o + d * t) * self.scale;
+                if s.next_1d() * mu < sig {
+                    weight *= match &self.albedo {
                         Albedo::Constant(a) => *a,
                         Albedo::Grid(g) => g.eval_world(ray.at(t)),
                     };
-                    weight *= albedo * sig / mean(sig);
                     return ControlFlow::Break(t);
                 }
-                // Null collision: weight 1 for a grey medium.
-                if sig.x != sig.y || sig.y != sig.z {
-                    weight *= (Spectrum::splat(mu) - sig) / (mu * (1.0 - p_real));
-                }
-                tau = -(1.0 - s.next_1d()).ln();
+                return ControlFlow::Continue(());
             }
+            let sig = self.sigma_t_unit(o + d * t);
+            let p_real = mean(sig) / mu;
+            if s.next_1d() < p_real {
+                let albedo = match &self.albedo {
+                    Albedo::Constant(a) => *a,
+                    Albedo::Grid(g) => g.eval_world(ray.at(t)),
+                };
+                weight *= albedo * sig / mean(sig);
+                return ControlFlow::Break(t);
+            }
+            // Null collision: weight 1 for a grey medium.
+            if sig.x != sig.y || sig.y != sig.z {
+                weight *= (Spectrum::splat(mu) - sig) / (mu * (1.0 - p_real));
+            }
+            ControlFlow::Continue(())
         });
         match r {
             ControlFlow::Break(t) => DistanceSample {
@@ -441,39 +460,26 @@ impl GridMedium {
         let d = self.sigma_t.to_unit.transform_vector3(ray.d);
         let mut tr = Spectrum::ONE;
         let grey = self.sigma_t.channels == 1;
-        let mut tau = -(1.0 - s.next_1d()).ln();
-        let r: ControlFlow<()> = self.walk(o, d, t_end, |t0, t1, mu| {
-            if mu <= 0.0 {
-                return ControlFlow::Continue(());
+        let r: ControlFlow<()> = self.track(o, d, t_end, s, |t, mu, s| {
+            if grey {
+                let sig = self.sigma_t.eval_unit_scalar(o + d * t) * self.scale;
+                tr *= (1.0 - sig / mu).max(0.0);
+            } else {
+                let sig = self.sigma_t_unit(o + d * t);
+                tr *= (Spectrum::ONE - sig / mu).max(Spectrum::ZERO);
             }
-            let mut t = t0;
-            loop {
-                let dt = tau / mu;
-                if t + dt >= t1 {
-                    tau -= mu * (t1 - t);
-                    return ControlFlow::Continue(());
+            // Russian roulette on small estimates keeps the cost bounded
+            // in dense regions; survivors are reweighted by 1/q, so the
+            // estimator stays unbiased.
+            let m = crate::math::max_comp(tr);
+            if m < 0.1 {
+                let q = 0.75;
+                if s.next_1d() < q {
+                    return ControlFlow::Break(());
                 }
-                t += dt;
-                if grey {
-                    let sig = self.sigma_t.eval_unit_scalar(o + d * t) * self.scale;
-                    tr *= (1.0 - sig / mu).max(0.0);
-                } else {
-                    let sig = self.sigma_t_unit(o + d * t);
-                    tr *= (Spectrum::ONE - sig / mu).max(Spectrum::ZERO);
-                }
-                // Russian roulette on small estimates keeps the cost bounded
-                // in dense regions; survivors are reweighted by 1/q, so the
-                // estimator stays unbiased.
-                let m = crate::math::max_comp(tr);
-                if m < 0.1 {
-                    let q = 0.75;
-                    if s.next_1d() < q {
-                        return ControlFlow::Break(());
-                    }
-                    tr /= 1.0 - q;
-                }
-                tau = -(1.0 - s.next_1d()).ln();
+                tr /= 1.0 - q;
             }
+            ControlFlow::Continue(())
         });
         match r {
             ControlFlow::Break(()) => Spectrum::ZERO,
