@@ -117,25 +117,11 @@ impl GridTex {
     pub fn eval_unit(&self, u: Vec3) -> Spectrum {
         match self.filter {
             GridFilter::Nearest => {
-                let idx = |k: usize| {
-                    ((u[k] * self.res[k] as f32).floor().max(0.0) as usize).min(self.res[k] - 1)
-                };
-                self.voxel(idx(0), idx(1), idx(2))
+                let [x, y, z] = self.nearest(u);
+                self.voxel(x, y, z)
             }
             GridFilter::Trilinear => {
-                let mut i0 = [0usize; 3];
-                let mut i1 = [0usize; 3];
-                let mut f = [0f32; 3];
-                for k in 0..3 {
-                    // Voxel centres at (i + 0.5)/res; clamp-to-edge outside.
-                    let x = u[k] * self.res[k] as f32 - 0.5;
-                    let fl = x.floor();
-                    let i = fl as i64;
-                    let hi = self.res[k] as i64 - 1;
-                    i0[k] = i.clamp(0, hi) as usize;
-                    i1[k] = (i + 1).clamp(0, hi) as usize;
-                    f[k] = x - fl;
-                }
+                let (i0, i1, f) = self.trilinear_corners(u);
                 let lerp = |a: Spectrum, b: Spectrum, t: f32| a + (b - a) * t;
                 let c00 = lerp(
                     self.voxel(i0[0], i0[1], i0[2]),
@@ -162,6 +148,36 @@ impl GridTex {
         }
     }
 
+    /// Index of the voxel holding unit-cube point `u` (`nearest` filter),
+    /// clamped to the grid.
+    #[inline]
+    fn nearest(&self, u: Vec3) -> [usize; 3] {
+        std::array::from_fn(|k| {
+            ((u[k] * self.res[k] as f32).floor().max(0.0) as usize).min(self.res[k] - 1)
+        })
+    }
+
+    /// The two voxel indices per axis around unit-cube point `u` and the
+    /// interpolation weight of the upper one (`trilinear` filter). Voxel
+    /// centres sit at (i + 0.5)/res; outside them the edge value is held
+    /// (clamp-to-edge).
+    #[inline]
+    fn trilinear_corners(&self, u: Vec3) -> ([usize; 3], [usize; 3], [f32; 3]) {
+        let mut i0 = [0usize; 3];
+        let mut i1 = [0usize; 3];
+        let mut f = [0f32; 3];
+        for k in 0..3 {
+            let x = u[k] * self.res[k] as f32 - 0.5;
+            let fl = x.floor();
+            let i = fl as i64;
+            let hi = self.res[k] as i64 - 1;
+            i0[k] = i.clamp(0, hi) as usize;
+            i1[k] = (i + 1).clamp(0, hi) as usize;
+            f[k] = x - fl;
+        }
+        (i0, i1, f)
+    }
+
     /// Value of a 1-channel grid at unit-cube coordinates `u` (the scalar
     /// fast path of [`Self::eval_unit`]).
     #[inline]
@@ -171,24 +187,11 @@ impl GridTex {
         let (rx, ry) = (self.res[0], self.res[1]);
         match self.filter {
             GridFilter::Nearest => {
-                let idx = |k: usize| {
-                    ((u[k] * self.res[k] as f32).floor().max(0.0) as usize).min(self.res[k] - 1)
-                };
-                d[(idx(2) * ry + idx(1)) * rx + idx(0)]
+                let [x, y, z] = self.nearest(u);
+                d[(z * ry + y) * rx + x]
             }
             GridFilter::Trilinear => {
-                let mut i0 = [0usize; 3];
-                let mut i1 = [0usize; 3];
-                let mut f = [0f32; 3];
-                for k in 0..3 {
-                    let x = u[k] * self.res[k] as f32 - 0.5;
-                    let fl = x.floor();
-                    let i = fl as i64;
-                    let hi = self.res[k] as i64 - 1;
-                    i0[k] = i.clamp(0, hi) as usize;
-                    i1[k] = (i + 1).clamp(0, hi) as usize;
-                    f[k] = x - fl;
-                }
+                let (i0, i1, f) = self.trilinear_corners(u);
                 let at = |x: usize, y: usize, z: usize| d[(z * ry + y) * rx + x];
                 let lerp = |a: f32, b: f32, t: f32| a + (b - a) * t;
                 let c00 = lerp(at(i0[0], i0[1], i0[2]), at(i1[0], i0[1], i0[2]), f[0]);
