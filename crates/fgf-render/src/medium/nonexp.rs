@@ -193,6 +193,33 @@ impl NonExp {
         }
     }
 
+    /// Draw the equivalent distance `s*` of channel `c` from `u` (from
+    /// `T_mm` for a reciprocal medium start, else from `p = T_sm`; infinite
+    /// for a transparent channel, which never collides) and invert
+    /// `s(t) = s*` along the ray. Returns `(s*, the hit distance if before
+    /// t_max, s(t_max))`, as [`Density::invert`] does.
+    #[inline]
+    fn draw_flight(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        c: usize,
+        u: f64,
+        from_medium: bool,
+    ) -> (f64, Option<f64>, f64) {
+        let s_star = match &self.models[c] {
+            Some(m) if from_medium => m.sample_medium(u),
+            Some(m) => m.sample_surface(u),
+            None => f64::INFINITY,
+        };
+        let t_max64 = t_max as f64;
+        let (hit, s_max) = match &self.density {
+            None => (if s_star < t_max64 { Some(s_star) } else { None }, t_max64),
+            Some(d) => d.invert(ray, t_max64, s_star),
+        };
+        (s_star, hit, s_max)
+    }
+
     /// Sample a free flight over `[0, t_max]`; see the module docs.
     pub fn sample_distance(
         &self,
@@ -207,19 +234,7 @@ impl NonExp {
         let c = ((s.next_1d() * 3.0) as usize).min(2);
         let u = s.next_1d() as f64;
         let from_medium = self.kernel == KernelDesc::Reciprocal && start == SegmentStart::Medium;
-        // Equivalent distance drawn from channel c (infinite for a
-        // transparent channel: it never collides).
-        let s_star = match &self.models[c] {
-            Some(m) if from_medium => m.sample_medium(u),
-            Some(m) => m.sample_surface(u),
-            None => f64::INFINITY,
-        };
-        // Invert s(t) = s* along the ray.
-        let t_max64 = t_max as f64;
-        let (hit, s_max) = match &self.density {
-            None => (if s_star < t_max64 { Some(s_star) } else { None }, t_max64),
-            Some(d) => d.invert(ray, t_max64, s_star),
-        };
+        let (s_star, hit, s_max) = self.draw_flight(ray, t_max, c, u, from_medium);
         match hit {
             Some(t) if (t as f32) < t_max => {
                 // Flight density of each channel at the sampled point.
@@ -276,16 +291,7 @@ impl NonExp {
     ) -> (DistanceSample, Spectrum) {
         let u = s.next_1d() as f64;
         let from_medium = self.kernel == KernelDesc::Reciprocal && start == SegmentStart::Medium;
-        let s_star = match &self.models[hero] {
-            Some(m) if from_medium => m.sample_medium(u),
-            Some(m) => m.sample_surface(u),
-            None => f64::INFINITY,
-        };
-        let t_max64 = t_max as f64;
-        let (hit, s_max) = match &self.density {
-            None => (if s_star < t_max64 { Some(s_star) } else { None }, t_max64),
-            Some(d) => d.invert(ray, t_max64, s_star),
-        };
+        let (s_star, hit, s_max) = self.draw_flight(ray, t_max, hero, u, from_medium);
         match hit {
             Some(t) if (t as f32) < t_max => {
                 let sample = |weight| DistanceSample {
