@@ -70,20 +70,20 @@ impl Camera {
     pub fn generate_ray(&self, fx: f32, fy: f32) -> (Ray, f32) {
         let nx = 2.0 * fx / self.width as f32 - 1.0;
         let ny = 2.0 * fy / self.height as f32 - 1.0;
+        // The point on the local z = 1 plane; its distance `len` from the
+        // eye scales the near and far planes (given along the view axis)
+        // into distances along the ray.
         let local = Vec3::new(-nx * self.tan_x, -ny * self.tan_y, 1.0);
-        let inv_len = 1.0 / local.length();
-        let d_local = local * inv_len;
-        let o = self.to_world.transform_point3(Vec3::ZERO);
-        let d = self.to_world.transform_vector3(d_local).normalize();
-        // Distances along d to the near and far planes (local z = near/far).
-        let t_near = self.near / d_local.z;
-        let t_far = self.far / d_local.z;
+        let len = local.length();
+        let o = Vec3::from(self.to_world.translation);
+        let d = self.to_world.transform_vector3(local).normalize();
+        let t_near = self.near * len;
         (
             Ray {
                 o: o + d * t_near,
                 d,
             },
-            t_far - t_near,
+            (self.far - self.near) * len,
         )
     }
 }

@@ -49,9 +49,27 @@ pub struct Sampler {
 
 impl Sampler {
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
+        Self::for_sample(Self::pixel_key(Self::seed_key(seed), pixel), sample)
+    }
+
+    /// The first step of [`Self::new`], which a renderer computes once per
+    /// image; then [`Self::pixel_key`] once per pixel and
+    /// [`Self::for_sample`] once per sample give the same stream as `new`.
+    #[inline]
+    pub fn seed_key(seed: u64) -> u64 {
+        mix64(seed)
+    }
+
+    #[inline]
+    pub fn pixel_key(seed_key: u64, pixel: u64) -> u64 {
         // Chained mixing (not xor of independent hashes) so that the triples
         // (a, b, c) and (b, a, c) give unrelated streams.
-        let h = mix64(mix64(mix64(seed) ^ pixel) ^ sample);
+        mix64(seed_key ^ pixel)
+    }
+
+    #[inline]
+    pub fn for_sample(pixel_key: u64, sample: u64) -> Self {
+        let h = mix64(pixel_key ^ sample);
         // PCG's stream selector is also hashed so neighbouring pixels do not
         // get the related increments that nearby stream ids would give.
         Sampler {

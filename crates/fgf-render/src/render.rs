@@ -103,11 +103,12 @@ pub fn render(
         }
         let n = per_pass.min(spp - done);
         let first = done;
+        let seed_key = Sampler::seed_key(seed);
         acc.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, a) in row.iter_mut().enumerate() {
-                let pixel = (y * w + x) as u64;
+                let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);
                 for k in first..first + n {
-                    let mut s = Sampler::new(seed, pixel, k as u64);
+                    let mut s = Sampler::for_sample(pixel_key, k as u64);
                     let (fx, fy, weight) =
                         filter.sample_position(x as u32, y as u32, w as u32, h as u32, &mut s);
                     let (ray, t_max) = world.camera.generate_ray(fx, fy);
@@ -120,7 +121,9 @@ pub fn render(
                     for c in 0..3 {
                         let v = l[c] as f64;
                         a.sum[c] += v;
-                        a.sum_sq[c] += v * v;
+                        if opts.variance {
+                            a.sum_sq[c] += v * v;
+                        }
                     }
                 }
             }
