@@ -30,10 +30,16 @@ use crate::render::RenderError;
 use crate::scene::desc::{IntegratorKind, SceneDesc};
 use glam::Vec3;
 
+/// Null-boundary crossings a shadow ray keeps per query (see
+/// [`World::shadow`]).
+const MAX_CROSSINGS: usize = 8;
+
 /// Per-shape data the integrator needs at a hit.
 #[derive(Debug, Clone, Copy)]
 pub struct ShapeInfo {
     pub bsdf: u32,
+    /// The BSDF is `null` (shadow rays pass through).
+    pub null: bool,
     /// Index into `World::emitters` of its area emitter.
     pub emitter: Option<u32>,
     pub interior: Option<u32>,
@@ -41,13 +47,14 @@ pub struct ShapeInfo {
 }
 
 impl ShapeInfo {
-    /// The medium a ray leaving the surface along `d` enters, if the shape
-    /// is a medium boundary (Mitsuba: exterior on the normal side).
+    /// The medium a ray leaving the surface (geometric normal `n`) along `d`
+    /// enters, if the shape is a medium boundary (Mitsuba: exterior on the
+    /// normal side).
     #[inline]
-    fn target_medium(&self, h: &Hit, d: Vec3, current: Option<u32>) -> Option<u32> {
+    fn target_medium(&self, n: Vec3, d: Vec3, current: Option<u32>) -> Option<u32> {
         if self.interior.is_none() && self.exterior.is_none() {
             current
-        } else if d.dot(h.n) > 0.0 {
+        } else if d.dot(n) > 0.0 {
             self.exterior
         } else {
             self.interior
@@ -69,6 +76,9 @@ pub struct World {
     pub max_depth: u32,
     pub rr_depth: u32,
     pub hide_emitters: bool,
+    /// Some shape has a `null` BSDF: paths then ask for the two nearest
+    /// hits, so that crossing the boundary needs no second traversal.
+    any_null: bool,
 }
 
 impl World {
@@ -122,6 +132,7 @@ impl World {
             };
             shapes.push(ShapeInfo {
                 bsdf: s.bsdf as u32,
+                null: bsdfs[s.bsdf].is_null(),
                 emitter,
                 interior: check_medium(s.interior, &s.name)?,
                 exterior: check_medium(s.exterior, &s.name)?,
@@ -147,7 +158,9 @@ impl World {
         }
         let camera = Camera::new(&desc.sensor)?;
         let camera_medium = check_medium(desc.sensor.medium, "the sensor")?;
+        let any_null = shapes.iter().any(|s| s.null);
         Ok(World {
+            any_null,
             geom,
             shapes,
             bsdfs,
@@ -176,6 +189,15 @@ impl World {
     /// Transmittance from `p` (offset off the surface with normal `n`, if on
     /// one) toward direction `wi` over `dist`, through null boundaries and
     /// media; zero if any other surface blocks it.
+    ///
+    /// One traversal ([`Geometry::for_each_hit`]) finds every surface on the
+    /// segment: it stops at the first blocker, and otherwise returns the
+    /// null-boundary crossings, which are walked in order to apply each
+    /// medium's transmittance to its piece of the segment. Crossings are
+    /// kept [`MAX_CROSSINGS`] at a time, nearest first; a segment crossing
+    /// more boundaries than that is resumed with a further query past the
+    /// last crossing handled.
+    #[allow(clippy::too_many_arguments)]
     fn shadow(
         &self,
         p: Vec3,
@@ -186,55 +208,100 @@ impl World {
         mut start: SegmentStart,
         s: &mut Sampler,
     ) -> Spectrum {
-        let target = if dist.is_finite() {
-            Some(p + wi * dist)
-        } else {
-            None
-        };
-        let mut o = match n {
+        let o = match n {
             Some(n) => offset_point(p, n, wi),
             None => p,
         };
+        // Aim at the target from the offset origin: keeping `wi` from the
+        // un-offset point would reach the light's surface earlier by
+        // offset/cos, more than the shadow epsilon at grazing angles, and the
+        // light would shadow itself.
+        let (d, t_end) = if n.is_none() {
+            (wi, dist - if dist.is_finite() { shadow_epsilon(p + wi * dist) } else { 0.0 })
+        } else if dist.is_finite() {
+            let q = p + wi * dist;
+            let v = q - o;
+            let len = v.length();
+            (v / len, len - shadow_epsilon(q))
+        } else {
+            (wi, f32::INFINITY)
+        };
+        if !(t_end > 0.0) {
+            return Spectrum::ONE;
+        }
+        let ray = Ray { o, d };
         let mut tr = Spectrum::ONE;
+        // Distance and primitive of the last crossing handled: a resumed
+        // query skips everything up to it, in (t, primitive) order.
+        let mut done = (0.0f32, 0u32);
         loop {
-            // Aim at the target from the offset origin: keeping `wi` from the
-            // un-offset point would reach the light's surface earlier by
-            // offset/cos, more than the shadow epsilon at grazing angles, and
-            // the light would shadow itself.
-            let (d, t_end) = match target {
-                Some(q) => {
-                    let v = q - o;
-                    let len = v.length();
-                    (v / len, len - shadow_epsilon(q))
+            let mut xs = [(0.0f32, 0u32, 0u32, Vec3::ZERO); MAX_CROSSINGS];
+            let mut len = 0usize;
+            let mut more = false;
+            let open = self.geom.for_each_hit(&ray, t_end, |prim, shape, t, n| {
+                if (t, prim) <= done {
+                    return true;
                 }
-                None => (wi, f32::INFINITY),
-            };
-            if !(t_end > 0.0) {
-                return tr;
-            }
-            let ray = Ray { o, d };
-            let hit = self.geom.intersect(&ray, t_end);
-            let t_seg = hit.map_or(t_end, |h| h.t);
-            if let Some(m) = medium {
-                tr *= self.media[m as usize].transmittance(
-                    &ray,
-                    t_seg,
-                    start,
-                    SegmentEnd::Surface,
-                    s,
-                );
-                if tr == Spectrum::ZERO {
-                    return tr;
+                if !self.shapes[shape as usize].null {
+                    return false;
                 }
-            }
-            let Some(h) = hit else { return tr };
-            let info = &self.shapes[h.shape as usize];
-            if !self.bsdfs[info.bsdf as usize].is_null() {
+                // Insert in (t, prim) order, keeping the nearest MAX_CROSSINGS.
+                let key = (t, prim);
+                if len == MAX_CROSSINGS {
+                    more = true;
+                    if key >= (xs[len - 1].0, xs[len - 1].1) {
+                        return true;
+                    }
+                    len -= 1;
+                }
+                let mut i = len;
+                while i > 0 && key < (xs[i - 1].0, xs[i - 1].1) {
+                    xs[i] = xs[i - 1];
+                    i -= 1;
+                }
+                xs[i] = (t, prim, shape, n);
+                len += 1;
+                true
+            });
+            if !open {
                 return Spectrum::ZERO;
             }
-            medium = info.target_medium(&h, wi, medium);
-            o = offset_point(h.p, h.n, wi);
-            start = SegmentStart::Surface;
+            // Segments [done.0, x.t] for each crossing x, then (if all
+            // crossings are in hand) the last one up to t_end.
+            for k in 0..=len {
+                let t_next = match k < len {
+                    true => xs[k].0,
+                    false if more => break,
+                    false => t_end,
+                };
+                if let Some(m) = medium {
+                    let seg = Ray {
+                        o: ray.at(done.0),
+                        d,
+                    };
+                    let t_seg = (t_next - done.0).max(0.0);
+                    tr *= self.media[m as usize].transmittance(
+                        &seg,
+                        t_seg,
+                        start,
+                        SegmentEnd::Surface,
+                        s,
+                    );
+                    if tr == Spectrum::ZERO {
+                        return tr;
+                    }
+                }
+                if k == len {
+                    break;
+                }
+                let (t, prim, shape, n) = xs[k];
+                medium = self.shapes[shape as usize].target_medium(n, d, medium);
+                start = SegmentStart::Surface;
+                done = (t, prim);
+            }
+            if !more {
+                return tr;
+            }
         }
     }
 
@@ -288,8 +355,20 @@ impl World {
         let hero = ((s.next_1d() * 3.0) as usize).min(2);
         let mut r_u = Spectrum::ONE;
         let mut inv_mis = 1.0f32;
+        // The nearest hit of `ray`, when a previous query already found it.
+        let mut known: Option<Option<Hit>> = None;
         loop {
-            let hit = self.geom.intersect(&ray, t_max);
+            // `after`: what the query says of the ray continued through `hit`.
+            let (hit, after) = match known.take() {
+                Some(h) => (h, None),
+                None if self.any_null => {
+                    let (h1, h2) = self.geom.intersect2(&ray, t_max);
+                    // No second hit below a finite t_max says nothing of
+                    // what lies beyond it.
+                    (h1, (h2.is_some() || t_max == f32::INFINITY).then_some(h2))
+                }
+                None => (self.geom.intersect(&ray, t_max), None),
+            };
             let t_surf = hit.map_or(t_max, |h| h.t);
             if let Some(m) = medium {
                 let med = &self.media[m as usize];
@@ -373,11 +452,19 @@ impl World {
             let bsdf = self.bsdfs[info.bsdf as usize];
             if bsdf.is_null() {
                 // Index-matched boundary: continue straight on; a new segment starts.
-                medium = info.target_medium(&h, ray.d, medium);
-                ray = Ray {
-                    o: offset_point(h.p, h.n, ray.d),
-                    d: ray.d,
-                };
+                medium = info.target_medium(h.n, ray.d, medium);
+                let o = offset_point(h.p, h.n, ray.d);
+                // The second hit of the query is the continued ray's first,
+                // if it lies ahead of the offset origin (else ask again).
+                known = after.and_then(|h2| match h2 {
+                    None => Some(None),
+                    Some(h2) => {
+                        let h2 = self.geom.make_hit(&ray, h2);
+                        let t = (h2.p - o).dot(ray.d);
+                        (t > 0.0).then_some(Some(Hit { t, ..h2 }))
+                    }
+                });
+                ray = Ray { o, d: ray.d };
                 start = SegmentStart::Surface;
                 continue;
             }
@@ -406,7 +493,7 @@ impl World {
             specular = bs.delta;
             prev_pdf = bs.pdf;
             prev_p = h.p;
-            medium = info.target_medium(&h, wo, medium);
+            medium = info.target_medium(h.n, wo, medium);
             ray = Ray {
                 o: offset_point(h.p, h.n, wo),
                 d: wo,
@@ -448,7 +535,7 @@ impl World {
             return None;
         }
         let pdf = ls.pdf * self.select_pdf();
-        let m = info.target_medium(h, ls.wi, medium);
+        let m = info.target_medium(h.n, ls.wi, medium);
         let tr = self.shadow(h.p, Some(h.n), ls.wi, ls.dist, m, SegmentStart::Surface, s);
         if tr == Spectrum::ZERO {
             return None;

@@ -100,8 +100,11 @@ const BINS: usize = 12;
 /// `MAX_LEAF` (4 packs) and the SAH counts cost in packs, not primitives.
 const PACK: usize = 4;
 const MAX_LEAF: usize = 16;
-/// Cost of a node's slab test relative to one 4-wide pack test.
-const TRAVERSAL_COST: f32 = 0.5;
+/// Cost of visiting a node (slab test, stack, branch) relative to one 4-wide
+/// pack test. Measured, not derived: 2 made renders faster than 0.5 or 1 both
+/// on the reference scenes (+9 %: their 8 primitives become one leaf of two
+/// packs instead of three leaves) and on an 80k-triangle mesh (+5 %).
+const TRAVERSAL_COST: f32 = 2.0;
 
 #[inline]
 fn packs(n: usize) -> f32 {
@@ -151,7 +154,8 @@ impl Bvh {
     }
 
     /// Like [`Self::traverse`], but calls `hit(start, count, t_max)` once per
-    /// leaf with its range in [`Self::order`].
+    /// leaf with its range in [`Self::order`]. A negative `t_max` returned
+    /// by `hit` ends the traversal.
     #[inline]
     pub fn traverse_leaves(
         &self,
@@ -174,6 +178,9 @@ impl Bvh {
             if slab_hit(node.min, node.max, o, inv_d, t_max) {
                 if node.count > 0 {
                     t_max = hit(node.offset, node.count as u32, t_max);
+                    if t_max < 0.0 {
+                        break;
+                    }
                 } else {
                     // Visit the child on the near side of the split first.
                     let (first, second) = if neg[node.axis as usize] {

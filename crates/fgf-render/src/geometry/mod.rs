@@ -44,6 +44,11 @@ pub struct Hit {
     pub shape: u32,
 }
 
+/// A hit found by a query but not yet made into a [`Hit`]: primitive,
+/// distance and barycentrics.
+#[derive(Debug, Clone, Copy)]
+pub struct HitRecord((u32, f32, f32, f32));
+
 /// Relative size of the offset that moves a spawned ray off its surface:
 /// `(1 + max|p|)·2⁻¹⁶`. Triangle and sphere hit points carry a rounding
 /// error of a few ulps of `|p|` (≈ 1e-7·|p|); the offset is two orders of
@@ -69,6 +74,10 @@ pub fn shadow_epsilon(q: Vec3) -> f32 {
     4.0 * (1.0 + q.abs().max_element()) * OFFSET_SCALE
 }
 
+/// A triangle `v0 + u e1 + v e2` (`u, v ≥ 0`, `u + v ≤ 1`) or, with
+/// `quad`, a parallelogram (`0 ≤ u, v ≤ 1`). `cube` faces and `rectangle`s
+/// are parallelograms: one primitive instead of two triangles halves their
+/// intersection tests (the reference scenes are made of nothing else).
 #[derive(Debug, Clone, Copy)]
 struct Tri {
     // SIMD vectors for the intersection test.
@@ -80,6 +89,14 @@ struct Tri {
     shape: u32,
     /// Index into `Geometry::vertex_normals`, or `u32::MAX` without normals.
     normals: u32,
+    quad: bool,
+}
+
+/// Faces of a mesh: triangles, or parallelograms given by their corners in
+/// order around the boundary (the fourth corner is implied by the others).
+enum Faces<'a> {
+    Tris(&'a [[u32; 3]]),
+    Quads(&'a [[u32; 4]]),
 }
 
 #[derive(Debug, Clone, Copy)]
@@ -135,22 +152,19 @@ struct TriPack {
     v0: [Vec4; 3],
     e1: [Vec4; 3],
     e2: [Vec4; 3],
+    /// Per lane: 1 for a triangle (`u + v ≤ 1`), 0 for a parallelogram
+    /// (`v ≤ 1`); `u ≤ 1` is tested for both.
+    tri_k: Vec4,
     /// Lanes holding triangles / other primitives (spheres, disks).
     tri_mask: u32,
     other_mask: u32,
 }
 
 impl TriPack {
-    /// Möller–Trumbore on 4 triangles; the nearest hit among the lanes in
-    /// `lanes` with `0 < t < t_max`, as `(lane, t, u, v)`.
+    /// Möller–Trumbore on 4 triangles: the mask of lanes among `lanes` hit
+    /// with `0 < t < t_max`, and every lane's `t`, `u`, `v`.
     #[inline(always)]
-    fn intersect(
-        &self,
-        o: [Vec4; 3],
-        d: [Vec4; 3],
-        t_max: f32,
-        lanes: u32,
-    ) -> Option<(u32, f32, f32, f32)> {
+    fn hits(&self, o: [Vec4; 3], d: [Vec4; 3], t_max: f32, lanes: u32) -> (u32, Vec4, Vec4, Vec4) {
         let cross = |a: &[Vec4; 3], b: &[Vec4; 3]| {
             [
                 a[1] * b[2] - a[2] * b[1],
@@ -172,21 +186,11 @@ impl TriPack {
         let ok = det.cmpne(zero)
             & u.cmpge(zero)
             & v.cmpge(zero)
-            & (u + v).cmple(Vec4::ONE)
+            & u.cmple(Vec4::ONE)
+            & (u * self.tri_k + v).cmple(Vec4::ONE)
             & t.cmpgt(zero)
             & t.cmplt(Vec4::splat(t_max));
-        let mut mask = ok.bitmask() & lanes & self.tri_mask;
-        let mut best: Option<(u32, f32, f32, f32)> = None;
-        let (ta, ua, va) = (t.to_array(), u.to_array(), v.to_array());
-        while mask != 0 {
-            let lane = mask.trailing_zeros();
-            mask &= mask - 1;
-            let l = lane as usize;
-            if best.map_or(true, |b| ta[l] < b.1) {
-                best = Some((lane, ta[l], ua[l], va[l]));
-            }
-        }
-        best
+        (ok.bitmask() & lanes & self.tri_mask, t, u, v)
     }
 }
 
@@ -208,7 +212,12 @@ pub struct Geometry {
 }
 
 fn tri_area(t: &Tri) -> f32 {
-    0.5 * t.e1.cross(t.e2).length()
+    let a = t.e1.cross(t.e2).length();
+    if t.quad {
+        a
+    } else {
+        0.5 * a
+    }
 }
 
 impl Geometry {
@@ -253,11 +262,10 @@ impl Geometry {
                             }
                             let base = pos.len() as u32;
                             pos.extend([nrm - u - v, nrm + u - v, nrm + u + v, nrm - u + v]);
-                            idx.push([base, base + 1, base + 2]);
-                            idx.push([base, base + 2, base + 3]);
+                            idx.push([base, base + 1, base + 2, base + 3]);
                         }
                     }
-                    g.add_mesh(sid, &m, &pos, None, &idx, flip);
+                    g.add_mesh(sid, &m, &pos, None, Faces::Quads(&idx), flip);
                 }
                 GeometryDesc::Rectangle => {
                     let pos = [
@@ -274,7 +282,7 @@ impl Geometry {
                         &m,
                         &pos,
                         None,
-                        &[[0, 1, 2], [0, 2, 3]],
+                        Faces::Quads(&[[0, 1, 2, 3]]),
                         flip * det_sign,
                     );
                 }
@@ -292,7 +300,7 @@ impl Geometry {
                         &m,
                         &mesh.positions,
                         mesh.normals.as_deref(),
-                        &mesh.indices,
+                        Faces::Tris(&mesh.indices),
                         flip,
                     );
                 }
@@ -383,6 +391,7 @@ impl Geometry {
                 let mut e1 = [[0f32; 4]; 3];
                 let mut e2 = [[0f32; 4]; 3];
                 let (mut tri_mask, mut other_mask) = (0u32, 0u32);
+                let mut tri_k = [1f32; 4];
                 for (lane, &p) in chunk.iter().enumerate() {
                     if p == PAD {
                         continue;
@@ -394,6 +403,9 @@ impl Geometry {
                             e1[k][lane] = t.e1[k];
                             e2[k][lane] = t.e2[k];
                         }
+                        if t.quad {
+                            tri_k[lane] = 0.0;
+                        }
                         tri_mask |= 1 << lane;
                     } else {
                         other_mask |= 1 << lane;
@@ -404,6 +416,7 @@ impl Geometry {
                     v0: v(v0),
                     e1: v(e1),
                     e2: v(e2),
+                    tri_k: Vec4::from_array(tri_k),
                     tri_mask,
                     other_mask,
                 }
@@ -418,7 +431,7 @@ impl Geometry {
         m: &Mat4,
         pos: &[Vec3],
         normals: Option<&[Vec3]>,
-        idx: &[[u32; 3]],
+        faces: Faces,
         sign: f32,
     ) {
         let wp: Vec<Vec3> = pos.iter().map(|&p| m.transform_point3(p)).collect();
@@ -431,17 +444,31 @@ impl Geometry {
         let first = self.tris.len() as u32;
         let mut cdf = Vec::new();
         let mut total = 0.0f32;
-        for t in idx {
-            let (v0, v1, v2) = (wp[t[0] as usize], wp[t[1] as usize], wp[t[2] as usize]);
-            let e1 = v1 - v0;
-            let e2 = v2 - v0;
+        // (v0, edge to u = 1, edge to v = 1, parallelogram?, triangle indices)
+        let corners: Vec<(Vec3, Vec3, Vec3, bool, Option<[u32; 3]>)> = match faces {
+            Faces::Tris(idx) => idx
+                .iter()
+                .map(|t| {
+                    let v0 = wp[t[0] as usize];
+                    (v0, wp[t[1] as usize] - v0, wp[t[2] as usize] - v0, false, Some(*t))
+                })
+                .collect(),
+            Faces::Quads(idx) => idx
+                .iter()
+                .map(|q| {
+                    let v0 = wp[q[0] as usize];
+                    (v0, wp[q[1] as usize] - v0, wp[q[3] as usize] - v0, true, None)
+                })
+                .collect(),
+        };
+        for (v0, e1, e2, quad, tri_idx) in corners {
             let c = e1.cross(e2);
-            // Degenerate triangles can never be hit and have no area.
+            // Degenerate faces can never be hit and have no area.
             if !(c.length_squared() > 0.0) || !c.is_finite() {
                 continue;
             }
-            let normals_idx = match &wn {
-                Some(wn) if t.iter().all(|&i| (i as usize) < wn.len()) => {
+            let normals_idx = match (&wn, tri_idx) {
+                (Some(wn), Some(t)) if t.iter().all(|&i| (i as usize) < wn.len()) => {
                     self.vertex_normals.push([
                         wn[t[0] as usize],
                         wn[t[1] as usize],
@@ -458,6 +485,7 @@ impl Geometry {
                 n: c.normalize() * sign,
                 shape: sid,
                 normals: normals_idx,
+                quad,
             };
             total += tri_area(&tri);
             cdf.push(total);
@@ -479,10 +507,15 @@ impl Geometry {
         match p >> KIND_SHIFT {
             KIND_TRI => {
                 let t = &self.tris[i];
-                Aabb::EMPTY
+                let b = Aabb::EMPTY
                     .grow(t.v0.into())
                     .grow((t.v0 + t.e1).into())
-                    .grow((t.v0 + t.e2).into())
+                    .grow((t.v0 + t.e2).into());
+                if t.quad {
+                    b.grow((t.v0 + t.e1 + t.e2).into())
+                } else {
+                    b
+                }
             }
             KIND_SPHERE => {
                 let s = &self.spheres[i];
@@ -507,61 +540,124 @@ impl Geometry {
         self.bvh.bounds()
     }
 
+    /// Calls `f(prim, t, u, v)` for every hit with `0 < t < t_max` of the
+    /// primitives of the leaf `start..start + count` (both crossings of a
+    /// sphere), where `f` returns the new `t_max`: smaller to look only for
+    /// nearer hits, negative to stop (then this returns `false`).
+    #[inline(always)]
+    fn leaf_hits(
+        &self,
+        ray: &Ray,
+        od: &([Vec4; 3], [Vec4; 3]),
+        start: u32,
+        count: u32,
+        t_max: &mut f32,
+        mut f: impl FnMut(u32, f32, f32, f32) -> f32,
+    ) -> bool {
+        // Leaves start at multiples of 4 (see `Bvh::pad_leaves`).
+        let end = start + count;
+        let mut k = start;
+        while k < end {
+            let pack = &self.packs[(k / 4) as usize];
+            let lanes = if end - k >= 4 { 0xF } else { (1u32 << (end - k)) - 1 };
+            if pack.tri_mask & lanes != 0 {
+                let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max, lanes);
+                if mask != 0 {
+                    let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+                    while mask != 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        // A lane may have been overtaken by an earlier one.
+                        if t[l] < *t_max {
+                            *t_max = f(self.prims[k as usize + l], t[l], u[l], v[l]);
+                            if *t_max < 0.0 {
+                                return false;
+                            }
+                        }
+                    }
+                }
+            }
+            let mut other = pack.other_mask & lanes;
+            while other != 0 {
+                let lane = other.trailing_zeros();
+                other &= other - 1;
+                let p = self.prims[(k + lane) as usize];
+                let i = (p & INDEX_MASK) as usize;
+                let roots = if p >> KIND_SHIFT == KIND_SPHERE {
+                    sphere_roots(&self.spheres[i], ray)
+                } else {
+                    [disk_root(&self.disks[i], ray), f32::NAN]
+                };
+                for t in roots {
+                    if t > 0.0 && t < *t_max {
+                        *t_max = f(p, t, 0.0, 0.0);
+                        if *t_max < 0.0 {
+                            return false;
+                        }
+                    }
+                }
+            }
+            k += 4;
+        }
+        true
+    }
+
+    /// The ray's origin and direction splatted for the 4-wide tests.
+    #[inline(always)]
+    fn splat_ray(ray: &Ray) -> ([Vec4; 3], [Vec4; 3]) {
+        (
+            ray.o.to_array().map(Vec4::splat),
+            ray.d.to_array().map(Vec4::splat),
+        )
+    }
+
     /// Nearest hit with `t < t_max`, if any.
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
-        let o4 = [
-            Vec4::splat(ray.o.x),
-            Vec4::splat(ray.o.y),
-            Vec4::splat(ray.o.z),
-        ];
-        let d4 = [
-            Vec4::splat(ray.d.x),
-            Vec4::splat(ray.d.y),
-            Vec4::splat(ray.d.z),
-        ];
+        let od = Self::splat_ray(ray);
         self.bvh
             .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_max| {
-                // Leaves start at multiples of 4 (see `Bvh::pad_leaves`).
-                let end = start + count;
-                let mut k = start;
-                while k < end {
-                    let pack = &self.packs[(k / 4) as usize];
-                    let lanes = if end - k >= 4 {
-                        0xF
-                    } else {
-                        (1u32 << (end - k)) - 1
-                    };
-                    if pack.tri_mask & lanes != 0 {
-                        if let Some((lane, t, u, v)) = pack.intersect(o4, d4, t_max, lanes) {
-                            best = Some((self.prims[(k + lane) as usize], t, u, v));
-                            t_max = t;
-                        }
-                    }
-                    let mut other = pack.other_mask & lanes;
-                    while other != 0 {
-                        let lane = other.trailing_zeros();
-                        other &= other - 1;
-                        let p = self.prims[(k + lane) as usize];
-                        let i = (p & INDEX_MASK) as usize;
-                        let r = match p >> KIND_SHIFT {
-                            KIND_SPHERE => intersect_sphere(&self.spheres[i], ray, t_max),
-                            _ => intersect_disk(&self.disks[i], ray, t_max),
-                        };
-                        if let Some((t, u, v)) = r {
-                            best = Some((p, t, u, v));
-                            t_max = t;
-                        }
-                    }
-                    k += 4;
-                }
+                self.leaf_hits(ray, &od, start, count, &mut t_max, |p, t, u, v| {
+                    best = Some((p, t, u, v));
+                    t
+                });
                 t_max
             });
-        let (p, t, u, v) = best?;
+        best.map(|b| self.make_hit(ray, HitRecord(b)))
+    }
+
+    /// The two nearest hits with `t < t_max`, nearer first. Used where the
+    /// nearest is likely a `null` boundary the path crosses: the second is
+    /// then the next hit of the continued ray, without a second traversal.
+    /// The second comes as a [`HitRecord`], made into a [`Hit`] by
+    /// [`Self::make_hit`] only if needed.
+    pub fn intersect2(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, Option<HitRecord>) {
+        let mut best: [Option<(u32, f32, f32, f32)>; 2] = [None, None];
+        let od = Self::splat_ray(ray);
+        self.bvh
+            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_leaf| {
+                self.leaf_hits(ray, &od, start, count, &mut t_leaf, |p, t, u, v| {
+                    // t is below the current second-nearest (t_leaf).
+                    match best[0] {
+                        Some(b) if b.1 <= t => best[1] = Some((p, t, u, v)),
+                        _ => {
+                            best[1] = best[0];
+                            best[0] = Some((p, t, u, v));
+                        }
+                    }
+                    best[1].map_or(t_max, |b| b.1)
+                });
+                t_leaf
+            });
+        (best[0].map(|b| self.make_hit(ray, HitRecord(b))), best[1].map(HitRecord))
+    }
+
+    /// The [`Hit`] of primitive `p` hit at `t` (barycentrics `u, v`).
+    #[inline]
+    pub fn make_hit(&self, ray: &Ray, HitRecord((p, t, u, v)): HitRecord) -> Hit {
         let i = (p & INDEX_MASK) as usize;
-        let pt = ray.at(t);
-        Some(match p >> KIND_SHIFT {
+        match p >> KIND_SHIFT {
             KIND_TRI => {
                 let tri = &self.tris[i];
                 let ns = if tri.normals != u32::MAX {
@@ -582,6 +678,7 @@ impl Geometry {
             }
             KIND_SPHERE => {
                 let s = &self.spheres[i];
+                let pt = ray.at(t);
                 let n = (pt - s.center).normalize() * s.sign;
                 // Re-project onto the sphere to cancel the error of o + t d.
                 let p = s.center + (pt - s.center) * (s.radius / (pt - s.center).length());
@@ -597,13 +694,52 @@ impl Geometry {
                 let d = &self.disks[i];
                 Hit {
                     t,
-                    p: pt,
+                    p: ray.at(t),
                     n: d.n,
                     ns: d.n,
                     shape: d.shape,
                 }
             }
-        })
+        }
+    }
+
+    /// Every crossing of the segment `o + t d`, `0 < t < t_max`, with a
+    /// surface, in no particular order: `visit(prim, shape, t, n)` gets a
+    /// primitive id (unique within the scene), the shape, the distance and
+    /// the geometric normal there. Returning `false` from `visit` ends the
+    /// query (an occluder was found), and then this returns `false`.
+    ///
+    /// One traversal answers a shadow ray that crosses any number of `null`
+    /// medium boundaries, where [`Self::intersect`] would be called once per
+    /// crossing.
+    pub fn for_each_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(u32, u32, f32, Vec3) -> bool,
+    ) -> bool {
+        let od = Self::splat_ray(ray);
+        let mut go = true;
+        self.bvh.traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t| {
+            go = self.leaf_hits(ray, &od, start, count, &mut t, |p, t, _, _| {
+                let i = (p & INDEX_MASK) as usize;
+                let (shape, n) = match p >> KIND_SHIFT {
+                    KIND_TRI => (self.tris[i].shape, self.tris[i].n),
+                    KIND_SPHERE => {
+                        let s = &self.spheres[i];
+                        (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+                    }
+                    _ => (self.disks[i].shape, self.disks[i].n),
+                };
+                if visit(p, shape, t, n) {
+                    t_max
+                } else {
+                    -1.0
+                }
+            });
+            t
+        });
+        go
     }
 
     /// A point uniformly distributed (by area) on shape `shape`; the pdf
@@ -614,7 +750,11 @@ impl Geometry {
                 // Choose a triangle by area, then a uniform point on it.
                 let k = cdf.partition_point(|&c| c <= u_sel).min(cdf.len() - 1);
                 let t = &self.tris[*first as usize + k];
-                let b = crate::math::sample_uniform_triangle(u);
+                let b = if t.quad {
+                    u
+                } else {
+                    crate::math::sample_uniform_triangle(u)
+                };
                 PositionSample {
                     p: (t.v0 + b[0] * t.e1 + b[1] * t.e2).into(),
                     n: t.n,
@@ -640,8 +780,9 @@ impl Geometry {
     }
 }
 
-/// Möller–Trumbore, one triangle; returns `(t, u, v)` with `0 < t < t_max`.
-/// The reference the 4-wide [`TriPack::intersect`] is tested against.
+/// Möller–Trumbore, one triangle or parallelogram; returns `(t, u, v)`
+/// with `0 < t < t_max`.
+/// The reference the 4-wide [`TriPack::hits`] is tested against.
 #[cfg(test)]
 fn intersect_tri(tri: &Tri, o: Vec3A, d: Vec3A, t_max: f32) -> Option<(f32, f32, f32)> {
     let pvec = d.cross(tri.e2);
@@ -657,7 +798,7 @@ fn intersect_tri(tri: &Tri, o: Vec3A, d: Vec3A, t_max: f32) -> Option<(f32, f32,
     }
     let qvec = tvec.cross(tri.e1);
     let v = d.dot(qvec) * inv_det;
-    if v < 0.0 || u + v > 1.0 {
+    if v < 0.0 || (if tri.quad { v > 1.0 } else { u + v > 1.0 }) {
         return None;
     }
     let t = tri.e2.dot(qvec) * inv_det;
@@ -668,8 +809,10 @@ fn intersect_tri(tri: &Tri, o: Vec3A, d: Vec3A, t_max: f32) -> Option<(f32, f32,
     }
 }
 
+/// Both ray parameters where the ray's line meets the sphere (NaN if it
+/// misses), nearer first.
 #[inline]
-fn intersect_sphere(s: &Sphere, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+fn sphere_roots(s: &Sphere, ray: &Ray) -> [f32; 2] {
     let oc = ray.o - s.center;
     let b = oc.dot(ray.d);
     // r² - |oc - b d|² is the discriminant computed without the catastrophic
@@ -677,36 +820,24 @@ fn intersect_sphere(s: &Sphere, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)
     let perp = oc - b * ray.d;
     let disc = s.radius * s.radius - perp.length_squared();
     if disc < 0.0 {
-        return None;
+        return [f32::NAN; 2];
     }
     let sq = disc.sqrt();
-    let t0 = -b - sq;
-    let t1 = -b + sq;
-    let t = if t0 > 0.0 { t0 } else { t1 };
-    if t > 0.0 && t < t_max {
-        Some((t, 0.0, 0.0))
-    } else {
-        None
-    }
+    [-b - sq, -b + sq]
 }
 
+/// Where the ray meets a disk (NaN if it misses).
 #[inline]
-fn intersect_disk(d: &Disk, ray: &Ray, t_max: f32) -> Option<(f32, f32, f32)> {
+fn disk_root(d: &Disk, ray: &Ray) -> f32 {
     let o = d.to_local.transform_point3(ray.o);
     let dir = d.to_local.transform_vector3(ray.d);
-    if dir.z == 0.0 {
-        return None;
-    }
     // Affine maps keep the ray parameter, so the local t is the world t.
     let t = -o.z / dir.z;
-    if !(t > 0.0 && t < t_max) {
-        return None;
-    }
     let p = o + t * dir;
     if p.x * p.x + p.y * p.y <= 1.0 {
-        Some((t, 0.0, 0.0))
+        t
     } else {
-        None
+        f32::NAN
     }
 }
 
@@ -763,5 +894,154 @@ mod tests {
                 other => panic!("{other:?}"),
             }
         }
+    }
+
+    /// A scene of every primitive kind (a triangle soup, cubes and
+    /// rectangles as parallelograms, spheres, disks): the nearest, the two
+    /// nearest and the all-hits queries agree with brute force over the
+    /// primitives, for random rays and random segment lengths.
+    #[test]
+    fn queries_match_brute_force_on_mixed_primitives() {
+        use glam::Quat;
+        let mut s = crate::math::Sampler::new(12, 0, 0);
+        let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let mut shapes = Vec::new();
+        let mut push = |geometry: GeometryDesc, to_world: Mat4| {
+            shapes.push(ShapeDesc {
+                name: format!("shape{}", shapes.len()),
+                geometry,
+                to_world,
+                flip_normals: false,
+                bsdf: 0,
+                emitter: None,
+                interior: None,
+                exterior: None,
+            })
+        };
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..40u32 {
+            let c = r3(&mut s) * 4.0;
+            for _ in 0..3 {
+                positions.push(c + (r3(&mut s) - Vec3::splat(0.5)) * 0.8);
+            }
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        let mesh = Arc::new(TriangleMesh { positions, normals: None, indices });
+        push(GeometryDesc::Mesh(mesh), Mat4::IDENTITY);
+        for _ in 0..6 {
+            let rot = Quat::from_axis_angle((r3(&mut s) - Vec3::splat(0.5)).normalize(), 3.0 * s.next_1d());
+            let m = Mat4::from_scale_rotation_translation(0.2 + r3(&mut s) * 0.6, rot, r3(&mut s) * 4.0);
+            push(GeometryDesc::Cube, m);
+            push(GeometryDesc::Rectangle, m * Mat4::from_translation(Vec3::Z * 0.3));
+            push(GeometryDesc::Disk, m * Mat4::from_translation(Vec3::X * 0.5));
+            let c = r3(&mut s) * 4.0;
+            push(GeometryDesc::Sphere { center: c, radius: 0.1 + 0.5 * s.next_1d() }, Mat4::IDENTITY);
+        }
+        let g = Geometry::build(&shapes).unwrap();
+        assert!(g.tris.iter().any(|t| t.quad) && !g.spheres.is_empty() && !g.disks.is_empty());
+        let mut n_hits = 0usize;
+        for _ in 0..3000 {
+            let o = r3(&mut s) * 6.0 - Vec3::ONE;
+            let d = crate::math::sample_uniform_sphere(s.next_2d());
+            let ray = Ray { o, d };
+            let t_max = if s.next_1d() < 0.5 { f32::INFINITY } else { 6.0 * s.next_1d() };
+            let mut want: Vec<(f32, u32)> = Vec::new();
+            for t in &g.tris {
+                if let Some((th, _, _)) = intersect_tri(t, o.into(), d.into(), t_max) {
+                    want.push((th, t.shape));
+                }
+            }
+            for sp in &g.spheres {
+                for th in sphere_roots(sp, &ray) {
+                    if th > 0.0 && th < t_max {
+                        want.push((th, sp.shape));
+                    }
+                }
+            }
+            for dk in &g.disks {
+                let th = disk_root(dk, &ray);
+                if th > 0.0 && th < t_max {
+                    want.push((th, dk.shape));
+                }
+            }
+            want.sort_by(|a, b| a.0.total_cmp(&b.0));
+            n_hits += want.len();
+            let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * (1.0 + b);
+            let near = g.intersect(&ray, t_max).map(|h| h.t);
+            match (near, want.first()) {
+                (None, None) => {}
+                (Some(a), Some(b)) => assert!(close(a, b.0), "nearest {a} vs {}", b.0),
+                other => panic!("nearest: {other:?}"),
+            }
+            let (h1, h2) = g.intersect2(&ray, t_max);
+            assert_eq!(h1.map(|h| h.t), near);
+            match (h2.map(|r| g.make_hit(&ray, r).t), want.get(1)) {
+                (None, None) => {}
+                (Some(a), Some(b)) => assert!(close(a, b.0), "second {a} vs {}", b.0),
+                other => panic!("second: {other:?}"),
+            }
+            let mut all = Vec::new();
+            assert!(g.for_each_hit(&ray, t_max, |_, shape, t, n| {
+                assert!((n.length() - 1.0).abs() < 1e-4);
+                all.push((t, shape));
+                true
+            }));
+            all.sort_by(|a, b| a.0.total_cmp(&b.0));
+            assert_eq!(all.len(), want.len());
+            for (a, b) in all.iter().zip(&want) {
+                assert!(close(a.0, b.0) && a.1 == b.1, "{a:?} vs {b:?}");
+            }
+            // Stopping at the first hit visits exactly one.
+            if !want.is_empty() {
+                let mut visits = 0;
+                assert!(!g.for_each_hit(&ray, t_max, |_, _, _, _| {
+                    visits += 1;
+                    false
+                }));
+                assert_eq!(visits, 1);
+            }
+        }
+        assert!(n_hits > 1000, "too few hits to test anything: {n_hits}");
+    }
+
+    /// Parallelograms sample points uniformly over their whole area, and a
+    /// cube's area is that of its six faces.
+    #[test]
+    fn cube_area_and_sampling() {
+        let shape = ShapeDesc {
+            name: "cube".into(),
+            geometry: GeometryDesc::Cube,
+            to_world: Mat4::from_scale(Vec3::new(1.0, 2.0, 3.0)),
+            flip_normals: false,
+            bsdf: 0,
+            emitter: None,
+            interior: None,
+            exterior: None,
+        };
+        let g = Geometry::build(&[shape]).unwrap();
+        // Faces 2x4, 4x6, 2x6 (two of each).
+        assert!((g.areas[0] - 2.0 * (8.0 + 24.0 + 12.0)).abs() < 1e-4);
+        let mut s = crate::math::Sampler::new(5, 0, 0);
+        let n = 40_000;
+        let mut on_top_far_corner = 0;
+        for _ in 0..n {
+            let ps = g.sample_shape(0, s.next_1d(), s.next_2d());
+            // On the surface of the box, normal pointing out of the face.
+            let q = ps.p / Vec3::new(1.0, 2.0, 3.0);
+            assert!((q.abs().max_element() - 1.0).abs() < 1e-5);
+            let axis = (0..3).max_by(|&a, &b| q[a].abs().total_cmp(&q[b].abs())).unwrap();
+            let mut face_n = Vec3::ZERO;
+            face_n[axis] = q[axis].signum();
+            assert!((ps.n - face_n).length() < 1e-6, "{:?} at {:?}", ps.n, ps.p);
+            if ps.n.y > 0.5 && ps.p.x > 0.0 && ps.p.z > 0.0 {
+                on_top_far_corner += 1;
+            }
+        }
+        // The quarter x, z > 0 of the +y face (2 x 6): area 3 of 88; 4 SE.
+        let p = 3.0 / 88.0;
+        let se = (p * (1.0 - p) / n as f64).sqrt();
+        let got = on_top_far_corner as f64 / n as f64;
+        assert!((got - p).abs() < 4.0 * se, "{got} vs {p}");
     }
 }
