@@ -145,13 +145,18 @@ const INDEX_MASK: u32 = (1 << KIND_SHIFT) - 1;
 const PAD: u32 = u32::MAX;
 
 /// Four triangles in structure-of-arrays form, intersected at once with
-/// SSE (glam's `Vec4`). Lanes without a triangle have zero edges, so their
-/// determinant is 0 and they never hit.
+/// SSE (glam's `Vec4`) by projection onto precomputed planes: with
+/// `N = e1 × e2`, a point `P` of the plane is `v0 + u e1 + v e2` for
+/// `u = (P - v0)·a`, `v = (P - v0)·b`, where `a = (e2 × N)/|N|²` and
+/// `b = (N × e1)/|N|²`. That is about 35 operations per pack against
+/// Möller–Trumbore's 55 (which tests recompute per ray). Lanes without a
+/// triangle have `N = 0`, so `t` is NaN and they never hit.
 #[derive(Debug, Clone, Copy)]
 struct TriPack {
     v0: [Vec4; 3],
-    e1: [Vec4; 3],
-    e2: [Vec4; 3],
+    n: [Vec4; 3],
+    a: [Vec4; 3],
+    b: [Vec4; 3],
     /// Per lane: 1 for a triangle (`u + v ≤ 1`), 0 for a parallelogram
     /// (`v ≤ 1`); `u ≤ 1` is tested for both.
     tri_k: Vec4,
@@ -161,30 +166,20 @@ struct TriPack {
 }
 
 impl TriPack {
-    /// Möller–Trumbore on 4 triangles: the mask of lanes among `lanes` hit
+    /// The 4 triangles against one ray: the mask of lanes among `lanes` hit
     /// with `0 < t < t_max`, and every lane's `t`, `u`, `v`.
     #[inline(always)]
     fn hits(&self, o: [Vec4; 3], d: [Vec4; 3], t_max: f32, lanes: u32) -> (u32, Vec4, Vec4, Vec4) {
-        let cross = |a: &[Vec4; 3], b: &[Vec4; 3]| {
-            [
-                a[1] * b[2] - a[2] * b[1],
-                a[2] * b[0] - a[0] * b[2],
-                a[0] * b[1] - a[1] * b[0],
-            ]
-        };
         let dot = |a: &[Vec4; 3], b: &[Vec4; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let pvec = cross(&d, &self.e2);
-        let det = dot(&self.e1, &pvec);
-        let inv_det = det.recip();
-        let tvec = [o[0] - self.v0[0], o[1] - self.v0[1], o[2] - self.v0[2]];
-        let u = dot(&tvec, &pvec) * inv_det;
-        let qvec = cross(&tvec, &self.e1);
-        let v = dot(&d, &qvec) * inv_det;
-        let t = dot(&self.e2, &qvec) * inv_det;
+        let w = [self.v0[0] - o[0], self.v0[1] - o[1], self.v0[2] - o[2]];
+        // A ray parallel to the plane (or an empty lane) gives ±inf or NaN,
+        // and NaN fails every comparison below.
+        let t = dot(&w, &self.n) / dot(&d, &self.n);
+        // P - v0 = t d - w.
+        let u = t * dot(&d, &self.a) - dot(&w, &self.a);
+        let v = t * dot(&d, &self.b) - dot(&w, &self.b);
         let zero = Vec4::ZERO;
-        // A zero determinant gives inf/NaN above; NaN fails every comparison.
-        let ok = det.cmpne(zero)
-            & u.cmpge(zero)
+        let ok = u.cmpge(zero)
             & v.cmpge(zero)
             & u.cmple(Vec4::ONE)
             & (u * self.tri_k + v).cmple(Vec4::ONE)
@@ -388,8 +383,9 @@ impl Geometry {
             .chunks(4)
             .map(|chunk| {
                 let mut v0 = [[0f32; 4]; 3];
-                let mut e1 = [[0f32; 4]; 3];
-                let mut e2 = [[0f32; 4]; 3];
+                let mut n = [[0f32; 4]; 3];
+                let mut a = [[0f32; 4]; 3];
+                let mut b = [[0f32; 4]; 3];
                 let (mut tri_mask, mut other_mask) = (0u32, 0u32);
                 let mut tri_k = [1f32; 4];
                 for (lane, &p) in chunk.iter().enumerate() {
@@ -398,10 +394,16 @@ impl Geometry {
                     }
                     if p >> KIND_SHIFT == KIND_TRI {
                         let t = &g.tris[(p & INDEX_MASK) as usize];
+                        // In f64: a and b divide by |N|², which can be tiny.
+                        let (e1, e2) = (t.e1.as_dvec3(), t.e2.as_dvec3());
+                        let nn = e1.cross(e2);
+                        let ta = e2.cross(nn) / nn.length_squared();
+                        let tb = nn.cross(e1) / nn.length_squared();
                         for k in 0..3 {
                             v0[k][lane] = t.v0[k];
-                            e1[k][lane] = t.e1[k];
-                            e2[k][lane] = t.e2[k];
+                            n[k][lane] = nn[k] as f32;
+                            a[k][lane] = ta[k] as f32;
+                            b[k][lane] = tb[k] as f32;
                         }
                         if t.quad {
                             tri_k[lane] = 0.0;
@@ -414,8 +416,9 @@ impl Geometry {
                 let v = |a: [[f32; 4]; 3]| a.map(Vec4::from_array);
                 TriPack {
                     v0: v(v0),
-                    e1: v(e1),
-                    e2: v(e2),
+                    n: v(n),
+                    a: v(a),
+                    b: v(b),
                     tri_k: Vec4::from_array(tri_k),
                     tri_mask,
                     other_mask,
@@ -612,6 +615,7 @@ impl Geometry {
     }
 
     /// Nearest hit with `t < t_max`, if any.
+    #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
@@ -632,6 +636,7 @@ impl Geometry {
     /// then the next hit of the continued ray, without a second traversal.
     /// The second comes as a [`HitRecord`], made into a [`Hit`] by
     /// [`Self::make_hit`] only if needed.
+    #[inline(always)]
     pub fn intersect2(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, Option<HitRecord>) {
         let mut best: [Option<(u32, f32, f32, f32)>; 2] = [None, None];
         let od = Self::splat_ray(ray);
