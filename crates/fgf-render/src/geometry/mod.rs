@@ -659,7 +659,7 @@ impl Geometry {
     }
 
     /// The [`Hit`] of primitive `p` hit at `t` (barycentrics `u, v`).
-    #[inline]
+    #[inline(always)]
     pub fn make_hit(&self, ray: &Ray, HitRecord((p, t, u, v)): HitRecord) -> Hit {
         let i = (p & INDEX_MASK) as usize;
         match p >> KIND_SHIFT {
