@@ -69,6 +69,24 @@ pub use davis_weinstein::DavisWeinstein;
 pub use exponential::Exponential;
 pub use fgf::Fgf;
 
+/// `ln(1 + x)` through the fast `ln`: with `u = 1 + x` rounded, `u - 1` is
+/// exact and `ln(u) · x/(u - 1)` corrects the rounding of `u` (Goldberg 1991,
+/// "What every computer scientist should know about floating-point
+/// arithmetic", Theorem 4: relative error below 5 ε). glibc's `log1p` is
+/// about three times slower than its `log`, and this is on the renderer's
+/// hot path.
+#[inline]
+pub(crate) fn ln_1p(x: f64) -> f64 {
+    let u = 1.0 + x;
+    if u == 1.0 {
+        x
+    } else if u == f64::INFINITY {
+        u
+    } else {
+        u.ln() * (x / (u - 1.0))
+    }
+}
+
 /// `g(x) = ln(1+x)/x`, `g(0) = 1`, `g(∞) = 0`. `ln_1p` keeps full relative
 /// accuracy for small `x`, so no series is needed here.
 #[inline]
@@ -78,7 +96,7 @@ pub(crate) fn g(x: f64) -> f64 {
     } else if x.is_infinite() {
         0.0
     } else {
-        x.ln_1p() / x
+        ln_1p(x) / x
     }
 }
 
@@ -259,7 +277,7 @@ fn pink_terms(ln_x: f64) -> (f64, f64, f64, f64) {
         (ln_x.ln() - ln_x, a, -a * a, 0.0)
     } else {
         let x = ln_x.exp();
-        let l = x.ln_1p();
+        let l = ln_1p(x);
         // Two divisions only: a = x / ((1+x) L), b = x a'(x) =
         // (x L - x²) / ((1+x)² L²) = a (L - x) / ((1+x) L), and
         // x b'(x) = x (N' - b D') / D by the quotient rule with
@@ -666,7 +684,7 @@ impl GammaCore {
     #[inline]
     pub fn sample_surface(&self, u: f64) -> f64 {
         // y = -ln(1-u) ≥ 0, accurate for small u.
-        let y = -(-u).ln_1p();
+        let y = -ln_1p(-u);
         if !(y > 0.0) {
             return if u == 0.0 { 0.0 } else { f64::NAN };
         }
@@ -727,7 +745,7 @@ impl GammaCore {
             // T_ms = Tr for e = 0; for k = 0 the model is exponential.
             return self.sample_surface(u);
         }
-        let y = -(-u).ln_1p();
+        let y = -ln_1p(-u);
         if !(y > 0.0) {
             return if u == 0.0 { 0.0 } else { f64::NAN };
         }
@@ -829,7 +847,7 @@ impl GammaCore {
         // ln q: through q - 1 near q = 1 (small x, no cancellation), and
         // directly once q < 1/2 (large x, where q - 1 would lose q).
         let ln_q = if q > 0.5 {
-            ((1.0 - e) * gm1 - e * x * inv).ln_1p()
+            ln_1p((1.0 - e) * gm1 - e * x * inv)
         } else {
             q.ln()
         };
@@ -996,6 +1014,29 @@ pub(crate) use forward_core;
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The fast `ln_1p` stays within Goldberg's bound (5 ε relative) of the
+    /// standard library's over 60 decades of `x` on both sides of 0, and
+    /// keeps the special values.
+    #[test]
+    fn fast_ln_1p_matches_std() {
+        let mut worst = 0.0f64;
+        for k in 0..=6000 {
+            let mag = 10f64.powf(-300.0 + 0.1 * k as f64);
+            for x in [mag, -mag * 0.999_999_9] {
+                if x <= -1.0 || !x.is_finite() {
+                    continue;
+                }
+                let (a, b) = (ln_1p(x), x.ln_1p());
+                worst = worst.max(((a - b) / b).abs());
+            }
+        }
+        assert!(worst <= 5.0 * f64::EPSILON, "worst relative error {worst:e}");
+        assert_eq!(ln_1p(0.0), 0.0);
+        assert_eq!(ln_1p(-1.0), f64::NEG_INFINITY);
+        assert_eq!(ln_1p(f64::INFINITY), f64::INFINITY);
+        assert!(ln_1p(-2.0).is_nan() && ln_1p(f64::NAN).is_nan() && ln_1p(f64::NEG_INFINITY).is_nan());
+    }
 
     #[test]
     fn series_match_direct_forms_at_the_switch() {
