@@ -211,10 +211,27 @@ def test_gallery_is_self_contained(tmp_path):
     assert "http://" not in page and "https://" not in page
 
 
-def test_missing_scene_dir_is_reported(tmp_path):
+def test_missing_scene_dir_is_a_usage_error(tmp_path):
+    for bad in [tmp_path / "nowhere", tmp_path / "a-file"]:
+        if bad.name == "a-file":
+            bad.write_text("x")
+        proc = subprocess.run(
+            [sys.executable, "-m", "fgf", "figures", "--out", str(tmp_path / "o"), "--quick", "--quiet",
+             "--only", "renders", "--scene-dir", str(bad)],
+            capture_output=True,
+            text=True,
+        )
+        assert proc.returncode == 2, proc.stderr
+        assert "Traceback" not in proc.stderr
+        assert "--scene-dir" in proc.stderr and str(bad) in proc.stderr
+        assert not (tmp_path / "o").exists()
+
+
+def test_scene_dir_without_the_scenes_is_reported(tmp_path):
+    (tmp_path / "empty").mkdir()
     proc = subprocess.run(
         [sys.executable, "-m", "fgf", "figures", "--out", str(tmp_path / "o"), "--quick", "--quiet",
-         "--only", "renders", "--scene-dir", str(tmp_path / "nowhere")],
+         "--only", "renders", "--scene-dir", str(tmp_path / "empty")],
         capture_output=True,
         text=True,
     )

@@ -47,10 +47,19 @@ def register(sub) -> None:
 
 
 def run(args) -> int:
+    import errno
+    import os
     import time
 
     from ..figures import make_figures
 
+    if args.scene_dir is not None and not os.path.isdir(args.scene_dir):
+        # Checked before any figure is made: a typo should not cost the
+        # minutes of the other groups and then end as a "not made" line.
+        missing = not os.path.exists(args.scene_dir)
+        err = FileNotFoundError if missing else NotADirectoryError
+        what = "no such directory" if missing else "not a directory"
+        raise err(errno.ENOENT if missing else errno.ENOTDIR, f"--scene-dir: {what}", args.scene_dir)
     start = time.perf_counter()
     report = make_figures(
         args.out,
