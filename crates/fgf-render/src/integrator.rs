@@ -217,7 +217,14 @@ impl World {
         // offset/cos, more than the shadow epsilon at grazing angles, and the
         // light would shadow itself.
         let (d, t_end) = if n.is_none() {
-            (wi, dist - if dist.is_finite() { shadow_epsilon(p + wi * dist) } else { 0.0 })
+            (
+                wi,
+                dist - if dist.is_finite() {
+                    shadow_epsilon(p + wi * dist)
+                } else {
+                    0.0
+                },
+            )
         } else if dist.is_finite() {
             let q = p + wi * dist;
             let v = q - o;
@@ -268,13 +275,10 @@ impl World {
             }
             // Segments [done.0, x.t] for each crossing x, then (if all
             // crossings are in hand) the last one up to t_end.
-            for k in 0..=len {
-                let t_next = match k < len {
-                    true => xs[k].0,
-                    false if more => break,
-                    false => t_end,
-                };
+            let last = (!more).then_some(None);
+            for x in xs[..len].iter().map(Some).chain(last) {
                 if let Some(m) = medium {
+                    let t_next = x.map_or(t_end, |x| x.0);
                     let seg = Ray {
                         o: ray.at(done.0),
                         d,
@@ -291,10 +295,9 @@ impl World {
                         return tr;
                     }
                 }
-                if k == len {
+                let Some(&(t, prim, shape, n)) = x else {
                     break;
-                }
-                let (t, prim, shape, n) = xs[k];
+                };
                 medium = self.shapes[shape as usize].target_medium(n, d, medium);
                 start = SegmentStart::Surface;
                 done = (t, prim);

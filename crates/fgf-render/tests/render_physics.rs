@@ -295,22 +295,39 @@ fn uncollided_slab_transmittance_grid() {
 /// the light direction,
 /// `L = ∫_0^d σ_s p(cos θ) E exp(-σ_t s / μ_l) exp(-σ_t s) ds`
 /// (depth `s` below the top face), integrated here by the midpoint rule.
-#[test]
-fn single_scattering_of_thin_slab_matches_quadrature() {
+///
+/// Above the slab, `absorbers` purely absorbing slabs of thickness `h` and
+/// extinction `σ_a` (z ∈ [0.5 + 0.2k, 0.6 + 0.2k], each its own medium in
+/// its own null-bounded cube) dim the camera ray and the light by
+/// `T = exp(-Σ σ_a h / μ)`, so the expected radiance is
+/// `T_cam · T_light · L`.
+fn thin_slab_single_scattering(absorbers: usize) {
     let (d, sigma_t, albedo, g, e) = (0.3f64, 2.0f64, 0.8f64, 0.5f32, 3.0f64);
+    let (h_abs, sigma_abs) = (0.1f64, 1.5f64);
     let light_dir = Vec3::new(0.6, 0.0, -0.8); // travels down and sideways
     let mut s = scene(
         2,
-        sensor(Vec3::new(0.0, 0.0, 2.0), Vec3::ZERO, Vec3::Y, 0.5, 8, 512),
+        sensor(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 0.5, 8, 512),
     );
     s.media.push(MediumDesc::Homogeneous {
         sigma_t: [sigma_t as f32; 3],
         albedo: [albedo as f32; 3],
         phase: PhaseDesc::Hg { g },
     });
-    let slab = Mat4::from_translation(Vec3::new(0.0, 0.0, d as f32 / 2.0))
-        * Mat4::from_scale(Vec3::new(50.0, 50.0, d as f32 / 2.0));
-    s.shapes.push(cube(slab, Some(0)));
+    let slab = |z0: f32, h: f32| {
+        Mat4::from_translation(Vec3::new(0.0, 0.0, z0 + h / 2.0))
+            * Mat4::from_scale(Vec3::new(50.0, 50.0, h / 2.0))
+    };
+    s.shapes.push(cube(slab(0.0, d as f32), Some(0)));
+    for k in 0..absorbers {
+        s.media.push(MediumDesc::Homogeneous {
+            sigma_t: [sigma_abs as f32; 3],
+            albedo: [0.0; 3],
+            phase: PhaseDesc::Isotropic,
+        });
+        s.shapes
+            .push(cube(slab(0.5 + 0.2 * k as f32, h_abs as f32), Some(k + 1)));
+    }
     s.emitters.push(EmitterDesc::Directional {
         direction: light_dir,
         irradiance: [e as f32; 3],
@@ -329,63 +346,23 @@ fn single_scattering_of_thin_slab_matches_quadrature() {
             albedo * sigma_t * p * e * (-sigma_t * s / mu_l).exp() * (-sigma_t * s).exp() * h
         })
         .sum();
-    assert_close("single scattering", m, se, [l; 3]);
+    let tau = absorbers as f64 * sigma_abs * h_abs;
+    let expected = (-tau).exp() * (-tau / mu_l).exp() * l;
+    let what = format!("single scattering under {absorbers} absorbers");
+    assert_close(&what, m, se, [expected; 3]);
 }
 
-/// The thin slab of the test above under a stack of six purely absorbing
-/// slabs (each its own medium in its own null-bounded cube): light reaches
-/// the scattering slab through 12 null boundaries, so the shadow rays cross
-/// 14 — more than one query keeps (`MAX_CROSSINGS` = 8), and the crossings
-/// are resumed. The camera looks down through the stack as well:
-/// `L = T_cam · L_single(E · T_light)`, `T = exp(-Σ σ_k h_k / μ)`.
+#[test]
+fn single_scattering_of_thin_slab_matches_quadrature() {
+    thin_slab_single_scattering(0);
+}
+
+/// Six absorbers: light reaches the scattering slab through 12 null
+/// boundaries, so its shadow rays cross 14, more than one query keeps
+/// (`MAX_CROSSINGS` = 8): the crossings are resumed.
 #[test]
 fn single_scattering_under_a_stack_of_absorbers() {
-    let (d, sigma_t, albedo, g, e) = (0.3f64, 2.0f64, 0.8f64, 0.5f32, 3.0f64);
-    let (k_abs, h_abs, sigma_abs) = (6usize, 0.1f64, 1.5f64);
-    let light_dir = Vec3::new(0.6, 0.0, -0.8);
-    let mut s = scene(
-        2,
-        sensor(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, Vec3::Y, 0.5, 8, 512),
-    );
-    s.media.push(MediumDesc::Homogeneous {
-        sigma_t: [sigma_t as f32; 3],
-        albedo: [albedo as f32; 3],
-        phase: PhaseDesc::Hg { g },
-    });
-    let slab = Mat4::from_translation(Vec3::new(0.0, 0.0, d as f32 / 2.0))
-        * Mat4::from_scale(Vec3::new(50.0, 50.0, d as f32 / 2.0));
-    s.shapes.push(cube(slab, Some(0)));
-    for k in 0..k_abs {
-        s.media.push(MediumDesc::Homogeneous {
-            sigma_t: [sigma_abs as f32; 3],
-            albedo: [0.0; 3],
-            phase: PhaseDesc::Isotropic,
-        });
-        let z0 = 0.5 + 0.2 * k as f32;
-        let m = Mat4::from_translation(Vec3::new(0.0, 0.0, z0 + h_abs as f32 / 2.0))
-            * Mat4::from_scale(Vec3::new(50.0, 50.0, h_abs as f32 / 2.0));
-        s.shapes.push(cube(m, Some(k + 1)));
-    }
-    s.emitters.push(EmitterDesc::Directional {
-        direction: light_dir,
-        irradiance: [e as f32; 3],
-    });
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    let mu_l = 0.8f64;
-    let tau = k_abs as f64 * sigma_abs * h_abs;
-    let (t_cam, t_light) = ((-tau).exp(), (-tau / mu_l).exp());
-    let cos = Vec3::new(0.0, 0.0, -1.0).dot(-light_dir) as f64;
-    let p = fgf_render::phase::hg(cos as f32, g) as f64;
-    let n = 100_000;
-    let h = d / n as f64;
-    let l: f64 = (0..n)
-        .map(|i| {
-            let s = (i as f64 + 0.5) * h;
-            albedo * sigma_t * p * e * (-sigma_t * s / mu_l).exp() * (-sigma_t * s).exp() * h
-        })
-        .sum();
-    assert_close("single scattering under absorbers", m, se, [t_cam * t_light * l; 3]);
+    thin_slab_single_scattering(6);
 }
 
 /// `max_depth = 1`: only emitters seen directly. A lit diffuse floor is black.

@@ -1031,11 +1031,16 @@ mod tests {
                 worst = worst.max(((a - b) / b).abs());
             }
         }
-        assert!(worst <= 5.0 * f64::EPSILON, "worst relative error {worst:e}");
+        assert!(
+            worst <= 5.0 * f64::EPSILON,
+            "worst relative error {worst:e}"
+        );
         assert_eq!(ln_1p(0.0), 0.0);
         assert_eq!(ln_1p(-1.0), f64::NEG_INFINITY);
         assert_eq!(ln_1p(f64::INFINITY), f64::INFINITY);
-        assert!(ln_1p(-2.0).is_nan() && ln_1p(f64::NAN).is_nan() && ln_1p(f64::NEG_INFINITY).is_nan());
+        assert!(
+            ln_1p(-2.0).is_nan() && ln_1p(f64::NAN).is_nan() && ln_1p(f64::NEG_INFINITY).is_nan()
+        );
     }
 
     #[test]

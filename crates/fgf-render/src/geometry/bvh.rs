@@ -8,10 +8,10 @@
 //! lines without unsafe code, its leaves mix triangles with analytic spheres
 //! and disks, and it tests leaf triangles 4 at a time (`TriPack` in
 //! `geometry/mod.rs`), which is what matters for scenes of a handful of
-//! primitives like the reference ones. Ray casting is about 40 % of the time
-//! on the homogeneous reference scene (measured with `perf`); going from
-//! per-triangle tests to SIMD slab tests and 4-wide leaf packs made the whole
-//! renderer 15 % faster there.
+//! primitives like the reference ones. On the homogeneous reference scene,
+//! SIMD slab tests and 4-wide leaf packs made the whole renderer 15 % faster
+//! than per-triangle tests; counting a node visit as 2 pack tests in the SAH
+//! (one leaf for its 8 primitives) another 9 % (see `docs/benchmarks.md`).
 
 use glam::{Vec3, Vec3A};
 

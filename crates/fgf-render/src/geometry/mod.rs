@@ -448,19 +448,32 @@ impl Geometry {
         let mut cdf = Vec::new();
         let mut total = 0.0f32;
         // (v0, edge to u = 1, edge to v = 1, parallelogram?, triangle indices)
-        let corners: Vec<(Vec3, Vec3, Vec3, bool, Option<[u32; 3]>)> = match faces {
+        type Corners = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>);
+        let corners: Vec<Corners> = match faces {
             Faces::Tris(idx) => idx
                 .iter()
                 .map(|t| {
                     let v0 = wp[t[0] as usize];
-                    (v0, wp[t[1] as usize] - v0, wp[t[2] as usize] - v0, false, Some(*t))
+                    (
+                        v0,
+                        wp[t[1] as usize] - v0,
+                        wp[t[2] as usize] - v0,
+                        false,
+                        Some(*t),
+                    )
                 })
                 .collect(),
             Faces::Quads(idx) => idx
                 .iter()
                 .map(|q| {
                     let v0 = wp[q[0] as usize];
-                    (v0, wp[q[1] as usize] - v0, wp[q[3] as usize] - v0, true, None)
+                    (
+                        v0,
+                        wp[q[1] as usize] - v0,
+                        wp[q[3] as usize] - v0,
+                        true,
+                        None,
+                    )
                 })
                 .collect(),
         };
@@ -562,7 +575,11 @@ impl Geometry {
         let mut k = start;
         while k < end {
             let pack = &self.packs[(k / 4) as usize];
-            let lanes = if end - k >= 4 { 0xF } else { (1u32 << (end - k)) - 1 };
+            let lanes = if end - k >= 4 {
+                0xF
+            } else {
+                (1u32 << (end - k)) - 1
+            };
             if pack.tri_mask & lanes != 0 {
                 let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max, lanes);
                 if mask != 0 {
@@ -655,7 +672,10 @@ impl Geometry {
                 });
                 t_leaf
             });
-        (best[0].map(|b| self.make_hit(ray, HitRecord(b))), best[1].map(HitRecord))
+        (
+            best[0].map(|b| self.make_hit(ray, HitRecord(b))),
+            best[1].map(HitRecord),
+        )
     }
 
     /// The [`Hit`] of primitive `p` hit at `t` (barycentrics `u, v`).
@@ -725,25 +745,26 @@ impl Geometry {
     ) -> bool {
         let od = Self::splat_ray(ray);
         let mut go = true;
-        self.bvh.traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t| {
-            go = self.leaf_hits(ray, &od, start, count, &mut t, |p, t, _, _| {
-                let i = (p & INDEX_MASK) as usize;
-                let (shape, n) = match p >> KIND_SHIFT {
-                    KIND_TRI => (self.tris[i].shape, self.tris[i].n),
-                    KIND_SPHERE => {
-                        let s = &self.spheres[i];
-                        (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+        self.bvh
+            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t| {
+                go = self.leaf_hits(ray, &od, start, count, &mut t, |p, t, _, _| {
+                    let i = (p & INDEX_MASK) as usize;
+                    let (shape, n) = match p >> KIND_SHIFT {
+                        KIND_TRI => (self.tris[i].shape, self.tris[i].n),
+                        KIND_SPHERE => {
+                            let s = &self.spheres[i];
+                            (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+                        }
+                        _ => (self.disks[i].shape, self.disks[i].n),
+                    };
+                    if visit(p, shape, t, n) {
+                        t_max
+                    } else {
+                        -1.0
                     }
-                    _ => (self.disks[i].shape, self.disks[i].n),
-                };
-                if visit(p, shape, t, n) {
-                    t_max
-                } else {
-                    -1.0
-                }
+                });
+                t
             });
-            t
-        });
         go
     }
 
@@ -852,37 +873,47 @@ mod tests {
     use crate::scene::desc::TriangleMesh;
     use std::sync::Arc;
 
+    /// A shape with BSDF 0 and no emitter or media.
+    fn plain_shape(geometry: GeometryDesc, to_world: Mat4) -> ShapeDesc {
+        ShapeDesc {
+            name: "shape".into(),
+            geometry,
+            to_world,
+            flip_normals: false,
+            bsdf: 0,
+            emitter: None,
+            interior: None,
+            exterior: None,
+        }
+    }
+
+    /// `n` random triangles of about `size` scattered over `[0, 4]³`.
+    fn triangle_soup(s: &mut crate::math::Sampler, n: u32, size: f32) -> Arc<TriangleMesh> {
+        let mut r3 = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let mut positions = Vec::new();
+        let mut indices = Vec::new();
+        for i in 0..n {
+            let c = r3() * 4.0;
+            for _ in 0..3 {
+                positions.push(c + (r3() - Vec3::splat(0.5)) * size);
+            }
+            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+        }
+        Arc::new(TriangleMesh {
+            positions,
+            normals: None,
+            indices,
+        })
+    }
+
     /// The BVH with 4-wide leaf packs finds the same nearest hit as a brute
     /// force loop over all triangles (random triangle soup, random rays).
     #[test]
     fn packed_bvh_matches_brute_force() {
         let mut s = crate::math::Sampler::new(11, 0, 0);
         let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
-        let mut positions = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..300u32 {
-            let c = r3(&mut s) * 4.0;
-            for _ in 0..3 {
-                positions.push(c + (r3(&mut s) - Vec3::splat(0.5)) * 0.6);
-            }
-            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
-        }
-        let mesh = Arc::new(TriangleMesh {
-            positions,
-            normals: None,
-            indices,
-        });
-        let shape = ShapeDesc {
-            name: "soup".into(),
-            geometry: GeometryDesc::Mesh(mesh),
-            to_world: Mat4::IDENTITY,
-            flip_normals: false,
-            bsdf: 0,
-            emitter: None,
-            interior: None,
-            exterior: None,
-        };
-        let g = Geometry::build(&[shape]).unwrap();
+        let mesh = triangle_soup(&mut s, 300, 0.6);
+        let g = Geometry::build(&[plain_shape(GeometryDesc::Mesh(mesh), Mat4::IDENTITY)]).unwrap();
         for _ in 0..2000 {
             let o = r3(&mut s) * 6.0 - Vec3::ONE;
             let d = crate::math::sample_uniform_sphere(s.next_2d());
@@ -911,37 +942,39 @@ mod tests {
         let mut s = crate::math::Sampler::new(12, 0, 0);
         let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
         let mut shapes = Vec::new();
-        let mut push = |geometry: GeometryDesc, to_world: Mat4| {
-            shapes.push(ShapeDesc {
-                name: format!("shape{}", shapes.len()),
-                geometry,
-                to_world,
-                flip_normals: false,
-                bsdf: 0,
-                emitter: None,
-                interior: None,
-                exterior: None,
-            })
-        };
-        let mut positions = Vec::new();
-        let mut indices = Vec::new();
-        for i in 0..40u32 {
-            let c = r3(&mut s) * 4.0;
-            for _ in 0..3 {
-                positions.push(c + (r3(&mut s) - Vec3::splat(0.5)) * 0.8);
-            }
-            indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
-        }
-        let mesh = Arc::new(TriangleMesh { positions, normals: None, indices });
-        push(GeometryDesc::Mesh(mesh), Mat4::IDENTITY);
+        let mut push =
+            |geometry: GeometryDesc, to_world: Mat4| shapes.push(plain_shape(geometry, to_world));
+        push(
+            GeometryDesc::Mesh(triangle_soup(&mut s, 40, 0.8)),
+            Mat4::IDENTITY,
+        );
         for _ in 0..6 {
-            let rot = Quat::from_axis_angle((r3(&mut s) - Vec3::splat(0.5)).normalize(), 3.0 * s.next_1d());
-            let m = Mat4::from_scale_rotation_translation(0.2 + r3(&mut s) * 0.6, rot, r3(&mut s) * 4.0);
+            let rot = Quat::from_axis_angle(
+                (r3(&mut s) - Vec3::splat(0.5)).normalize(),
+                3.0 * s.next_1d(),
+            );
+            let m = Mat4::from_scale_rotation_translation(
+                0.2 + r3(&mut s) * 0.6,
+                rot,
+                r3(&mut s) * 4.0,
+            );
             push(GeometryDesc::Cube, m);
-            push(GeometryDesc::Rectangle, m * Mat4::from_translation(Vec3::Z * 0.3));
-            push(GeometryDesc::Disk, m * Mat4::from_translation(Vec3::X * 0.5));
+            push(
+                GeometryDesc::Rectangle,
+                m * Mat4::from_translation(Vec3::Z * 0.3),
+            );
+            push(
+                GeometryDesc::Disk,
+                m * Mat4::from_translation(Vec3::X * 0.5),
+            );
             let c = r3(&mut s) * 4.0;
-            push(GeometryDesc::Sphere { center: c, radius: 0.1 + 0.5 * s.next_1d() }, Mat4::IDENTITY);
+            push(
+                GeometryDesc::Sphere {
+                    center: c,
+                    radius: 0.1 + 0.5 * s.next_1d(),
+                },
+                Mat4::IDENTITY,
+            );
         }
         let g = Geometry::build(&shapes).unwrap();
         assert!(g.tris.iter().any(|t| t.quad) && !g.spheres.is_empty() && !g.disks.is_empty());
@@ -950,7 +983,11 @@ mod tests {
             let o = r3(&mut s) * 6.0 - Vec3::ONE;
             let d = crate::math::sample_uniform_sphere(s.next_2d());
             let ray = Ray { o, d };
-            let t_max = if s.next_1d() < 0.5 { f32::INFINITY } else { 6.0 * s.next_1d() };
+            let t_max = if s.next_1d() < 0.5 {
+                f32::INFINITY
+            } else {
+                6.0 * s.next_1d()
+            };
             let mut want: Vec<(f32, u32)> = Vec::new();
             for t in &g.tris {
                 if let Some((th, _, _)) = intersect_tri(t, o.into(), d.into(), t_max) {
@@ -1014,17 +1051,11 @@ mod tests {
     /// cube's area is that of its six faces.
     #[test]
     fn cube_area_and_sampling() {
-        let shape = ShapeDesc {
-            name: "cube".into(),
-            geometry: GeometryDesc::Cube,
-            to_world: Mat4::from_scale(Vec3::new(1.0, 2.0, 3.0)),
-            flip_normals: false,
-            bsdf: 0,
-            emitter: None,
-            interior: None,
-            exterior: None,
-        };
-        let g = Geometry::build(&[shape]).unwrap();
+        let cube = plain_shape(
+            GeometryDesc::Cube,
+            Mat4::from_scale(Vec3::new(1.0, 2.0, 3.0)),
+        );
+        let g = Geometry::build(&[cube]).unwrap();
         // Faces 2x4, 4x6, 2x6 (two of each).
         assert!((g.areas[0] - 2.0 * (8.0 + 24.0 + 12.0)).abs() < 1e-4);
         let mut s = crate::math::Sampler::new(5, 0, 0);
@@ -1035,7 +1066,9 @@ mod tests {
             // On the surface of the box, normal pointing out of the face.
             let q = ps.p / Vec3::new(1.0, 2.0, 3.0);
             assert!((q.abs().max_element() - 1.0).abs() < 1e-5);
-            let axis = (0..3).max_by(|&a, &b| q[a].abs().total_cmp(&q[b].abs())).unwrap();
+            let axis = (0..3)
+                .max_by(|&a, &b| q[a].abs().total_cmp(&q[b].abs()))
+                .unwrap();
             let mut face_n = Vec3::ZERO;
             face_n[axis] = q[axis].signum();
             assert!((ps.n - face_n).length() < 1e-6, "{:?} at {:?}", ps.n, ps.p);
