@@ -104,19 +104,30 @@ pub(crate) fn g(x: f64) -> f64 {
 /// lose about `ε / x` relative accuracy by cancellation (4e-15 at `x = 0.1`),
 /// the 17-term series truncates at `0.1^17`.
 const SERIES_X: f64 = 0.1;
-const SERIES_TERMS: u32 = 17;
+const SERIES_TERMS: usize = 17;
+
+/// Signed coefficients of the two series, `(-1)^(m+1)/(m+2)` and
+/// `(-1)^m (m+1)/(m+2)` for `m = 0..17`, divided at compile time (the same
+/// IEEE divisions the loops used to do on every call, so the same values).
+#[rustfmt::skip]
+const G_MINUS_1_COEF: [f64; SERIES_TERMS] = [
+    -1.0 / 2.0, 1.0 / 3.0, -1.0 / 4.0, 1.0 / 5.0, -1.0 / 6.0, 1.0 / 7.0, -1.0 / 8.0, 1.0 / 9.0,
+    -1.0 / 10.0, 1.0 / 11.0, -1.0 / 12.0, 1.0 / 13.0, -1.0 / 14.0, 1.0 / 15.0, -1.0 / 16.0,
+    1.0 / 17.0, -1.0 / 18.0,
+];
+#[rustfmt::skip]
+const X_NEG_DG_COEF: [f64; SERIES_TERMS] = [
+    1.0 / 2.0, -2.0 / 3.0, 3.0 / 4.0, -4.0 / 5.0, 5.0 / 6.0, -6.0 / 7.0, 7.0 / 8.0, -8.0 / 9.0,
+    9.0 / 10.0, -10.0 / 11.0, 11.0 / 12.0, -12.0 / 13.0, 13.0 / 14.0, -14.0 / 15.0,
+    15.0 / 16.0, -16.0 / 17.0, 17.0 / 18.0,
+];
 
 /// `g(x) - 1 = Σ_{n≥1} (-1)^n x^n / (n+1)`, without cancellation at small `x`.
 #[inline]
 pub(crate) fn g_minus_1(x: f64) -> f64 {
     if x < SERIES_X {
         // Horner on Σ_{m≥0} (-1)^(m+1) x^m / (m+2), times x.
-        let mut s = 0.0;
-        for m in (0..SERIES_TERMS).rev() {
-            let c = 1.0 / (m as f64 + 2.0);
-            s = s * x + if m % 2 == 0 { -c } else { c };
-        }
-        s * x
+        G_MINUS_1_COEF.iter().rev().fold(0.0, |s, &c| s * x + c) * x
     } else {
         g(x) - 1.0
     }
@@ -127,12 +138,7 @@ pub(crate) fn g_minus_1(x: f64) -> f64 {
 #[inline]
 fn x_neg_dg(x: f64) -> f64 {
     if x < SERIES_X {
-        let mut s = 0.0;
-        for m in (0..SERIES_TERMS).rev() {
-            let c = (m as f64 + 1.0) / (m as f64 + 2.0);
-            s = s * x + if m % 2 == 0 { c } else { -c };
-        }
-        s * x
+        X_NEG_DG_COEF.iter().rev().fold(0.0, |s, &c| s * x + c) * x
     } else if x.is_infinite() {
         0.0
     } else {
