@@ -1,14 +1,15 @@
 //! Scene geometry in world space (f32, like Mitsuba's `scalar_rgb`):
-//! triangles (meshes, `cube`, `rectangle`), analytic spheres and disks, one
-//! BVH over all of them, ray spawning with robust offsets, and uniform
-//! area sampling of a shape (for area lights).
+//! triangles (meshes), parallelograms (`cube` faces, `rectangle`), analytic
+//! spheres and disks, one BVH over all of them with three queries (nearest
+//! hit, two nearest hits, every hit of a segment), ray spawning with robust
+//! offsets, and uniform area sampling of a shape (for area lights).
 //!
 //! Normal conventions follow Mitsuba 3: a shape's geometric normal `n` is
 //! the side an area light emits toward and decides `interior`/`exterior`
 //! (a ray leaving along `n` enters the exterior); `flip_normals` negates it.
 //! `rectangle` and `disk` transform their local `+z` as a normal (inverse
 //! transpose), so a mirroring `to_world` keeps the orientation; meshes and
-//! `cube` use the winding of the transformed triangles.
+//! `cube` use the winding of the transformed triangles (faces).
 
 pub mod bvh;
 
@@ -149,8 +150,9 @@ const PAD: u32 = u32::MAX;
 /// `N = e1 × e2`, a point `P` of the plane is `v0 + u e1 + v e2` for
 /// `u = (P - v0)·a`, `v = (P - v0)·b`, where `a = (e2 × N)/|N|²` and
 /// `b = (N × e1)/|N|²`. That is about 35 operations per pack against
-/// Möller–Trumbore's 55 (which tests recompute per ray). Lanes without a
-/// triangle have `N = 0`, so `t` is NaN and they never hit.
+/// Möller–Trumbore's 55, which derives the equivalent of `N`, `a`, `b` per
+/// ray. Lanes without a triangle have `N = 0`, so `t` is NaN and they never
+/// hit.
 #[derive(Debug, Clone, Copy)]
 struct TriPack {
     v0: [Vec4; 3],
