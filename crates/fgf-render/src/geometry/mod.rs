@@ -449,33 +449,26 @@ impl Geometry {
         let first = self.tris.len() as u32;
         let mut cdf = Vec::new();
         let mut total = 0.0f32;
-        // (v0, edge to u = 1, edge to v = 1, parallelogram?, triangle indices)
-        type Corners = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>);
-        let corners: Vec<Corners> = match faces {
+        // Each face as (v0, edge to u = 1, edge to v = 1, parallelogram?,
+        // its vertex indices if a triangle: they index the vertex normals).
+        let face = |i0: u32, i1: u32, i2: u32| {
+            let v0 = wp[i0 as usize];
+            (v0, wp[i1 as usize] - v0, wp[i2 as usize] - v0)
+        };
+        type Face = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>);
+        let corners: Vec<Face> = match faces {
             Faces::Tris(idx) => idx
                 .iter()
                 .map(|t| {
-                    let v0 = wp[t[0] as usize];
-                    (
-                        v0,
-                        wp[t[1] as usize] - v0,
-                        wp[t[2] as usize] - v0,
-                        false,
-                        Some(*t),
-                    )
+                    let (v0, e1, e2) = face(t[0], t[1], t[2]);
+                    (v0, e1, e2, false, Some(*t))
                 })
                 .collect(),
             Faces::Quads(idx) => idx
                 .iter()
                 .map(|q| {
-                    let v0 = wp[q[0] as usize];
-                    (
-                        v0,
-                        wp[q[1] as usize] - v0,
-                        wp[q[3] as usize] - v0,
-                        true,
-                        None,
-                    )
+                    let (v0, e1, e2) = face(q[0], q[1], q[3]);
+                    (v0, e1, e2, true, None)
                 })
                 .collect(),
         };
