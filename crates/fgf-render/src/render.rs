@@ -95,6 +95,7 @@ pub fn render(
         .clamp(1, spp);
     let mut acc = vec![Accum::default(); w * h];
     let mut done = 0u32;
+    let seed_key = Sampler::seed_key(seed);
     let mut interrupted = false;
     while done < spp {
         if progress.cancelled() {
@@ -103,7 +104,6 @@ pub fn render(
         }
         let n = per_pass.min(spp - done);
         let first = done;
-        let seed_key = Sampler::seed_key(seed);
         acc.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
             for (x, a) in row.iter_mut().enumerate() {
                 let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);

@@ -139,7 +139,8 @@ fn iterative(model: &Model) -> bool {
     }
 }
 
-fn exact_sample(model: &Model, flight: Flight, u: f64) -> f64 {
+/// The exact sampler of `flight` (what the table stands in for).
+pub fn exact_sample(model: &Model, flight: Flight, u: f64) -> f64 {
     match flight {
         Flight::Surface => model.sample_surface(u),
         Flight::Medium => model.sample_medium(u),

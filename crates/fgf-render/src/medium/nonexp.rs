@@ -97,7 +97,7 @@
 //! the grid's box `ρ = 0` (the medium is empty there, as for Mitsuba's
 //! `heterogeneous`).
 
-use super::flight_table::{Flight, FlightTable};
+use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
 use crate::geometry::Ray;
 use crate::math::{Sampler, Spectrum};
@@ -233,8 +233,7 @@ impl NonExp {
         };
         let s_star = match (&self.models[c], &self.tables[c][flight as usize]) {
             (Some(m), Some(table)) => table.sample(m, flight, u),
-            (Some(m), None) if from_medium => m.sample_medium(u),
-            (Some(m), None) => m.sample_surface(u),
+            (Some(m), None) => exact_sample(m, flight, u),
             (None, _) => f64::INFINITY,
         };
         let t_max64 = t_max as f64;
