@@ -14,6 +14,34 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+__all__ = [
+    "__version__",
+    "FgfError",
+    "ParameterError",
+    "SceneError",
+    "_Model",
+    "ModelFunction",
+    "c_const",
+    "s_p",
+    "s_kf",
+    "binom",
+    "kfbm_point_variance",
+    "line_average_variance",
+    "synthesize",
+    "synthesis_info",
+    "sample_optical_depth",
+    "sample_kfbm_1d",
+    "sw_3d_for_ray_statistics",
+    "variogram",
+    "covariance",
+    "radial_power_spectrum",
+    "line_average_second_moment",
+    "write_field",
+    "render_scene",
+    "write_exr",
+    "write_png",
+    "ensemble_scene",
+]
 
 _F64Array: TypeAlias = npt.NDArray[np.float64]
 _F32Array: TypeAlias = npt.NDArray[np.float32]
@@ -85,7 +113,7 @@ class _Model:
     def davis(sigma_t: float, alpha: float) -> _Model: ...
     @staticmethod
     def davis_weinstein(sigma_t: float, h: float, c: float) -> _Model: ...
-    def eval(self, what: ModelFunction, x: _F64Array, /) -> _F64Array:
+    def eval(self, what: ModelFunction, x: _F64Array) -> _F64Array:
         """``what`` elementwise over a 1-D contiguous float64 array (samplers
         check ``0 <= u < 1``; ``VARIANCE``/``ALPHA`` need an Fgf model)."""
     @property
