@@ -15,7 +15,7 @@ from pathlib import Path
 from typing import Any, Callable
 
 
-def write_atomic(path: str | os.PathLike, write: Callable[[Any], None], mode: str = "wb") -> str:
+def write_atomic(path: str | os.PathLike[str], write: Callable[[Any], object], mode: str = "wb") -> str:
     """Write ``path`` through ``write(file_handle)``; return the file name.
 
     Raises ``FileNotFoundError`` naming the directory when it does not exist.

@@ -1,20 +1,110 @@
-"""Type stubs for the private native module ``fgf._core``.
+"""Type stubs for the private native module ``fgf._core`` (crate ``fgf-py``).
 
-Each area owns one section below; edit only your own section.
+One section per area, in the order of the crates below the binding:
+errors, progress, transmittance (``fgf-core``), field (``fgf-field``),
+io (``fgf-io`` through ``fgf-field``'s exporter and the image writers),
+render and ensemble (``fgf-render``). The typed public API is the Python
+package ``fgf``; these functions take already-converted arguments.
 """
 
+from collections.abc import Callable, Sequence
+from typing import Any, ClassVar, Protocol, TypeAlias, TypedDict, final
+
+import numpy as np
+import numpy.typing as npt
+
 __version__: str
+__all__ = [
+    "__version__",
+    "FgfError",
+    "ParameterError",
+    "SceneError",
+    "_Model",
+    "ModelFunction",
+    "c_const",
+    "s_p",
+    "s_kf",
+    "binom",
+    "kfbm_point_variance",
+    "line_average_variance",
+    "synthesize",
+    "synthesis_info",
+    "sample_optical_depth",
+    "sample_kfbm_1d",
+    "sw_3d_for_ray_statistics",
+    "variogram",
+    "covariance",
+    "radial_power_spectrum",
+    "line_average_second_moment",
+    "write_field",
+    "render_scene",
+    "write_exr",
+    "write_png",
+    "ensemble_scene",
+]
 
-class FgfError(ValueError): ...
-class ParameterError(FgfError): ...
-class SceneError(FgfError): ...
+_F64Array: TypeAlias = npt.NDArray[np.float64]
+_F32Array: TypeAlias = npt.NDArray[np.float32]
+_FloatArray: TypeAlias = npt.NDArray[np.floating[Any]]  # float32 or float64
 
-# --- transmittance (issue 2) ---
-import numpy as _np
-import numpy.typing as _npt
+# --- errors ---------------------------------------------------------------------
 
+class FgfError(ValueError):
+    """Base class of fgf's errors."""
+
+class ParameterError(FgfError):
+    """A parameter outside its valid range; the message names it and the range."""
+
+class SceneError(FgfError):
+    """An invalid scene file or one outside the supported subset (file:line:col)."""
+
+# --- progress -------------------------------------------------------------------
+# Every long job takes ``progress``: None or False (quiet), "bar" (an
+# indicatif bar on stderr), an object with ``update(n)`` (units finished since
+# the last call, e.g. a tqdm bar) or a callable ``progress(done, total)``.
+# Ctrl-C cancels the job.
+
+class _Updatable(Protocol):
+    def update(self, n: int, /) -> object: ...
+
+_Progress: TypeAlias = bool | str | _Updatable | Callable[[int, int], object] | None
+
+# --- transmittance --------------------------------------------------------------
+
+@final
+class ModelFunction:
+    """The function of a model that :meth:`_Model.eval` maps over an array
+    (a native enum: members compare equal to their index, ``int(member)``)."""
+
+    TR: ClassVar[ModelFunction]
+    PDF: ClassVar[ModelFunction]
+    MEDIUM_SURFACE: ClassVar[ModelFunction]
+    MEDIUM_MEDIUM: ClassVar[ModelFunction]
+    SAMPLE_SURFACE: ClassVar[ModelFunction]
+    SAMPLE_MEDIUM: ClassVar[ModelFunction]
+    VARIANCE: ClassVar[ModelFunction]
+    ALPHA: ClassVar[ModelFunction]
+    def __int__(self) -> int: ...
+
+class _ModelParams(TypedDict, total=False):
+    """What :meth:`_Model.params` returns: ``kind`` and ``sigma_t`` always,
+    then the parameters of that kind."""
+
+    kind: str  # "exponential", "fgf", "davis" or "davis_weinstein"
+    sigma_t: float
+    hurst: float  # fgf
+    sw: float  # fgf
+    length: float | None  # fgf (None unless k-fBm)
+    regime: str  # fgf: "white", "pink" or "k-fbm"
+    k: int  # fgf: k-fBm order, 0 for white and pink noise
+    alpha: float  # davis
+    h: float  # davis_weinstein
+    c: float  # davis_weinstein
+
+@final
 class _Model:
     """Native transmittance model behind fgf.Exponential/Fgf/Davis/DavisWeinstein."""
+
     @staticmethod
     def exponential(sigma_t: float) -> _Model: ...
     @staticmethod
@@ -23,10 +113,12 @@ class _Model:
     def davis(sigma_t: float, alpha: float) -> _Model: ...
     @staticmethod
     def davis_weinstein(sigma_t: float, h: float, c: float) -> _Model: ...
-    def eval(self, what: str, x: _npt.NDArray[_np.float64]) -> _npt.NDArray[_np.float64]: ...
+    def eval(self, what: ModelFunction, x: _F64Array) -> _F64Array:
+        """``what`` elementwise over a 1-D contiguous float64 array (samplers
+        check ``0 <= u < 1``; ``VARIANCE``/``ALPHA`` need an Fgf model)."""
     @property
     def sigma_bar(self) -> float: ...
-    def params(self) -> dict[str, object]: ...
+    def params(self) -> _ModelParams: ...
     def to_davis(self) -> _Model: ...
     def to_davis_weinstein(self) -> _Model: ...
 
@@ -34,71 +126,82 @@ def c_const(hurst: float, d: int = 1) -> float: ...
 def s_p(hurst: float, sw: float) -> float: ...
 def s_kf(hurst: float, sw: float) -> float: ...
 def binom(a: float, k: int) -> float: ...
-def kfbm_point_variance(
-    hurst: float, sw: float, x: _npt.NDArray[_np.float64]
-) -> _npt.NDArray[_np.float64]: ...
-def line_average_variance(
-    hurst: float, sw: float, t: _npt.NDArray[_np.float64], length: float | None = None
-) -> _npt.NDArray[_np.float64]: ...
+def kfbm_point_variance(hurst: float, sw: float, x: _F64Array) -> _F64Array: ...
+def line_average_variance(hurst: float, sw: float, t: _F64Array, length: float | None = None) -> _F64Array: ...
 
-# --- field (issue 3) ---
-import numpy as np  # noqa: E402
+# --- field ----------------------------------------------------------------------
 
 def synthesize(
-    shape: list[int],
+    shape: Sequence[int],
     hurst: float,
     sw: float,
     spacing: float,
     seed: int,
-    anchor: object,
+    anchor: str | Sequence[int] | None,
     padding: float | None,
     dtype: str,
-    progress: object,
-) -> np.ndarray: ...
+    progress: _Progress,
+) -> _FloatArray:
+    """One realization, C order, ``dtype`` "float32" or "float64"."""
+
 def synthesis_info(
-    shape: list[int], hurst: float, sw: float, spacing: float, padding: float | None, dtype: str
-) -> tuple[float, list[int], int | None]: ...
+    shape: Sequence[int], hurst: float, sw: float, spacing: float, padding: float | None, dtype: str
+) -> tuple[float, list[int], int | None]:
+    """``(discrete spectral variance, padded shape, peak bytes or None)``."""
+
 def sample_optical_depth(
-    n_rays: int, n_steps: int, t_max: float, hurst: float, sw: float, seed: int, progress: object
-) -> tuple[np.ndarray, np.ndarray]: ...
+    n_rays: int, n_steps: int, t_max: float, hurst: float, sw: float, seed: int, progress: _Progress
+) -> tuple[_F64Array, _F64Array]:
+    """``(tau (n_rays, n_steps + 1), t (n_steps + 1))``."""
+
 def sample_kfbm_1d(
-    n_samples: int, n_steps: int, length: float, hurst: float, sw: float, seed: int, progress: object
-) -> tuple[np.ndarray, np.ndarray]: ...
+    n_samples: int, n_steps: int, length: float, hurst: float, sw: float, seed: int, progress: _Progress
+) -> tuple[_F64Array, _F64Array]:
+    """``(values (n_samples, n_steps + 1), x (n_steps + 1))``."""
+
 def sw_3d_for_ray_statistics(hurst: float, sw: float) -> float: ...
-def variogram(field: np.ndarray, axis: int, max_lag: int) -> list[float]: ...
-def covariance(field: np.ndarray, axis: int, max_lag: int) -> list[float]: ...
-def radial_power_spectrum(field: np.ndarray, spacing: float, n_bins: int) -> tuple[list[float], list[float], list[int]]: ...
-def line_average_second_moment(field: np.ndarray, axis: int, lengths: list[int]) -> list[float]: ...
+def variogram(field: _FloatArray, axis: int, max_lag: int) -> list[float]: ...
+def covariance(field: _FloatArray, axis: int, max_lag: int) -> list[float]: ...
+def radial_power_spectrum(field: _FloatArray, spacing: float, n_bins: int) -> tuple[list[float], list[float], list[int]]:
+    """``(mean |k|, mean periodogram, mode count)`` per non-empty bin."""
+
+def line_average_second_moment(field: _FloatArray, axis: int, lengths: Sequence[int]) -> list[float]: ...
+
+# --- io -------------------------------------------------------------------------
+
 def write_field(
     path: str,
-    field: np.ndarray,
+    field: _FloatArray,
     spacing: float,
     mean: float,
     scale: float,
     clamp_min: float | None,
     png_percentiles: tuple[float, float],
-) -> dict[str, object]: ...
-# --- render (issue 4/5) ---
-import numpy as np  # noqa: E402
+) -> dict[str, Any]:
+    """Write by extension (.npy, .vol, .exr, .png), atomically; returns
+    ``format``, ``min``, ``max``, ``n_negative`` of the written values."""
+
+def write_exr(path: str, img: _F32Array) -> None:
+    """Write an ``(H, W, 3)`` float32 image as a linear float32 EXR (atomically)."""
+
+def write_png(path: str, img: _F32Array, exposure: float = 0.0) -> None:
+    """Write an ``(H, W, 3)`` float32 linear image as an sRGB PNG preview (atomically)."""
+
+# --- render ---------------------------------------------------------------------
 
 def render_scene(
     scene: str,
     spp: int | None = None,
     seed: int | None = None,
     threads: int | None = None,
-    defines: list[tuple[str, str]] | None = None,
-    progress: object = None,
+    defines: Sequence[tuple[str, str]] | None = None,
+    progress: _Progress = None,
     return_variance: bool = False,
-) -> tuple[np.ndarray, np.ndarray | None, int, bool]:
+) -> tuple[_F32Array, _F32Array | None, int, bool]:
     """Render a scene file: ``(image (H, W, 3) float32, variance or None, spp_done, interrupted)``."""
 
-def write_exr(path: str, img: np.ndarray) -> None:
-    """Write an ``(H, W, 3)`` float32 image as a linear float32 EXR (atomically)."""
+# --- ensemble -------------------------------------------------------------------
 
-def write_png(path: str, img: np.ndarray, exposure: float = 0.0) -> None:
-    """Write an ``(H, W, 3)`` float32 linear image as an sRGB PNG preview (atomically)."""
-
-# --- ensemble (issue 5) ---
 def ensemble_scene(
     scene: str,
     realizations: int,
@@ -106,7 +209,7 @@ def ensemble_scene(
     spp: int | None = None,
     seed: int = 0,
     threads: int | None = None,
-    defines: list[tuple[str, str]] | None = None,
-    progress: object = None,
-) -> tuple[np.ndarray, np.ndarray, dict[str, object], bool]:
+    defines: Sequence[tuple[str, str]] | None = None,
+    progress: _Progress = None,
+) -> tuple[_F32Array, _F32Array, dict[str, Any], bool]:
     """Ensemble of explicit realizations: ``(mean, stderr, info, interrupted)``, images ``(H, W, 3)`` float32."""

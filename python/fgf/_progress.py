@@ -10,10 +10,27 @@ from __future__ import annotations
 
 import contextlib
 import sys
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional, Protocol, Union
 
 import numpy as np
 
 from . import _core
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
+
+class SupportsUpdate(Protocol):
+    """A tqdm-like progress object: ``update(n)`` with the units finished
+    since the last call."""
+
+    def update(self, n: int, /) -> object: ...
+
+
+#: What ``progress=`` accepts in the public API.
+Progress = Union[bool, None, SupportsUpdate, Callable[[int, int], object]]
+#: What ``fgf._core`` accepts (``progress_sink`` turns the former into this).
+CoreProgress = Union[None, str, SupportsUpdate, Callable[[int, int], object]]
 
 
 class _TqdmOnFirstCall:
@@ -21,7 +38,7 @@ class _TqdmOnFirstCall:
 
     def __init__(self, desc: str) -> None:
         self.desc = desc
-        self.bar = None
+        self.bar: Optional[tqdm[Any]] = None
         self.last = 0
 
     def __call__(self, done: int, total: int) -> None:
@@ -38,7 +55,7 @@ class _TqdmOnFirstCall:
 
 
 @contextlib.contextmanager
-def progress_sink(progress, desc: str):
+def progress_sink(progress: Progress, desc: str) -> Iterator[CoreProgress]:
     """Yield the ``progress`` object to hand to ``_core``; close any bar on exit."""
     if progress is True:
         if not sys.stderr.isatty():
@@ -53,7 +70,7 @@ def progress_sink(progress, desc: str):
         yield None if progress is False else progress
 
 
-def check_int(name: str, value, lo: int, hi: int) -> int:
+def check_int(name: str, value: object, lo: int, hi: int) -> int:
     """``value`` as an int in ``[lo, hi]``, else ``fgf.ParameterError`` naming ``name``."""
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or not lo <= int(value) <= hi:
         raise _core.ParameterError(f"invalid {name} = {value!r}: must be an integer in [{lo}, {hi}]")
@@ -63,6 +80,6 @@ def check_int(name: str, value, lo: int, hi: int) -> int:
 SEED_MAX = 2**64 - 1
 
 
-def check_seed(seed) -> int:
+def check_seed(seed: object) -> int:
     """A seed is an integer in [0, 2^64 - 1]."""
     return check_int("seed", seed, 0, SEED_MAX)

@@ -1,4 +1,4 @@
-"""Ground truth from explicit realizations of ``fgf`` media (issue 5).
+"""Ground truth from explicit realizations of ``fgf`` media.
 
 Each ``fgf`` medium of the scene is replaced, realization by realization,
 by an explicit 3D grid ``sigma_t(x) = max(0, sigma_m rho(x) + sigma_u(x))``
@@ -19,24 +19,71 @@ is in the Rust module ``fgf_render::ensemble``.
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Mapping, Sequence
+from typing import TYPE_CHECKING, Any, Literal, Union, overload
+
+import numpy as np
+import numpy.typing as npt
 
 from . import _core
+
+if TYPE_CHECKING:
+    from ._progress import Progress
+    from .render import Defines
+
+#: A mean or standard-error image: ``(H, W, 3)`` float32.
+Image = npt.NDArray[np.float32]
 
 __all__ = ["ensemble"]
 
 
+@overload
 def ensemble(
-    scene: str | os.PathLike,
+    scene: str | os.PathLike[str],
     realizations: int = 16,
     resolution: int | None = None,
     spp: int | None = None,
     seed: int = 0,
     threads: int | None = None,
-    defines: Mapping[str, Any] | Sequence[str] | None = None,
-    progress: bool | Any | Callable[[int, int], None] | None = True,
+    defines: Defines = None,
+    progress: Progress = True,
+    return_info: Literal[False] = False,
+) -> tuple[Image, Image]: ...
+@overload
+def ensemble(
+    scene: str | os.PathLike[str],
+    realizations: int = 16,
+    resolution: int | None = None,
+    spp: int | None = None,
+    seed: int = 0,
+    threads: int | None = None,
+    defines: Defines = None,
+    progress: Progress = True,
+    *,
+    return_info: Literal[True],
+) -> tuple[Image, Image, dict[str, Any]]: ...
+@overload
+def ensemble(
+    scene: str | os.PathLike[str],
+    realizations: int = 16,
+    resolution: int | None = None,
+    spp: int | None = None,
+    seed: int = 0,
+    threads: int | None = None,
+    defines: Defines = None,
+    progress: Progress = True,
     return_info: bool = False,
-):
+) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]: ...
+def ensemble(
+    scene: str | os.PathLike[str],
+    realizations: int = 16,
+    resolution: int | None = None,
+    spp: int | None = None,
+    seed: int = 0,
+    threads: int | None = None,
+    defines: Defines = None,
+    progress: Progress = True,
+    return_info: bool = False,
+) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]:
     """Average classical renders of explicit realizations of the scene's ``fgf`` media.
 
     Parameters

@@ -29,12 +29,14 @@ Examples
 
 from __future__ import annotations
 
-from typing import Any, Callable, Sequence, Union
+import os
+from typing import Any, Callable, Sequence, TypeVar, Union
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _core
-from ._progress import check_int, check_seed, progress_sink
+from ._progress import Progress, check_int, check_seed, progress_sink
 
 __all__ = [
     "synthesize",
@@ -50,17 +52,20 @@ __all__ = [
     "save_field",
 ]
 
-Progress = Union[bool, None, Any, Callable[[int, int], None]]
 Anchor = Union[str, None, Sequence[int]]
+#: A field as returned by :func:`synthesize`: float32 or float64.
+FloatField = npt.NDArray[np.floating[Any]]
+
+_R = TypeVar("_R")
 
 
-def _run(fn, progress: Progress, desc: str, *args):
+def _run(fn: Callable[..., _R], progress: Progress, desc: str, *args: Any) -> _R:
     """Call ``fn(*args, progress)`` with the public ``progress=`` translated."""
     with progress_sink(progress, desc) as sink:
         return fn(*args, sink)
 
 
-def _shape(shape) -> list[int]:
+def _shape(shape: int | Sequence[int]) -> list[int]:
     if isinstance(shape, (int, np.integer)):
         shape = [shape]
     return [check_int("shape", n, 1, 2**62) for n in shape]
@@ -74,9 +79,9 @@ def synthesize(
     seed: int = 0,
     anchor: Anchor = "corner",
     padding: float | None = None,
-    dtype: Any = np.float32,
+    dtype: npt.DTypeLike = np.float32,
     progress: Progress = True,
-) -> np.ndarray:
+) -> FloatField:
     """Synthesize one realization of a fractional Gaussian field on a grid.
 
     Spectral method of ``theory.md`` §1: cell-averaged white noise of
@@ -209,7 +214,7 @@ def sample_optical_depth(
     sw: float = 1.0,
     seed: int = 0,
     progress: Progress = True,
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """Exact fluctuating optical depth along rays through white or pink noise.
 
     ``tau_u(t) = int_0^t sigma_u`` is a fractional Brownian motion with Hurst
@@ -263,7 +268,7 @@ def sample_kfbm_1d(
     sw: float = 1.0,
     seed: int = 0,
     progress: Progress = True,
-) -> np.ndarray:
+) -> npt.NDArray[np.float64]:
     """Exact anchored 1D k-fBm by Cholesky factorisation of its covariance.
 
     Samples at ``x[i] = i * length / n_steps``; ``x[0] = 0`` is the anchor.
@@ -294,14 +299,14 @@ def sample_kfbm_1d(
     )[0]
 
 
-def _array(field) -> np.ndarray:
+def _array(field: npt.ArrayLike) -> FloatField:
     a = np.asarray(field)
     if a.dtype not in (np.float32, np.float64):
         a = a.astype(np.float64)
     return np.ascontiguousarray(a)
 
 
-def variogram(field: np.ndarray, axis: int = -1, max_lag: int | None = None) -> np.ndarray:
+def variogram(field: npt.ArrayLike, axis: int = -1, max_lag: int | None = None) -> npt.NDArray[np.float64]:
     """Empirical variogram ``gamma(h) = 1/2 mean (f(x + h) - f(x))^2`` along an axis.
 
     Lags ``h = 0 .. max_lag`` in samples (default: half the axis), pairs
@@ -319,7 +324,7 @@ def variogram(field: np.ndarray, axis: int = -1, max_lag: int | None = None) -> 
     return np.asarray(_core.variogram(a, axis, lag))
 
 
-def covariance(field: np.ndarray, axis: int = -1, max_lag: int | None = None) -> np.ndarray:
+def covariance(field: npt.ArrayLike, axis: int = -1, max_lag: int | None = None) -> npt.NDArray[np.float64]:
     """Empirical covariance ``mean (f(x) - mu)(f(x + h) - mu)`` along an axis.
 
     ``mu`` is the mean of the whole field; lags ``0 .. max_lag`` samples
@@ -331,7 +336,9 @@ def covariance(field: np.ndarray, axis: int = -1, max_lag: int | None = None) ->
     return np.asarray(_core.covariance(a, axis, lag))
 
 
-def radial_power_spectrum(field: np.ndarray, spacing: float = 1.0, n_bins: int = 32) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def radial_power_spectrum(
+    field: npt.ArrayLike, spacing: float = 1.0, n_bins: int = 32
+) -> tuple[npt.NDArray[np.float64], npt.NDArray[np.float64], npt.NDArray[np.int_]]:
     """Radially averaged periodogram ``|FFT(f)|^2 spacing^d / N``.
 
     Its expectation for a periodic synthesized field is ``P(k) = sw
@@ -348,7 +355,7 @@ def radial_power_spectrum(field: np.ndarray, spacing: float = 1.0, n_bins: int =
     return np.asarray(k), np.asarray(p), np.asarray(c)
 
 
-def line_average_second_moment(field: np.ndarray, lengths: Sequence[int], axis: int = -1) -> np.ndarray:
+def line_average_second_moment(field: npt.ArrayLike, lengths: Sequence[int], axis: int = -1) -> npt.NDArray[np.float64]:
     """Mean of ``sigma_bar^2`` over non-overlapping segments along an axis.
 
     ``sigma_bar`` is the mean of ``L`` consecutive samples, the line average
@@ -360,14 +367,14 @@ def line_average_second_moment(field: np.ndarray, lengths: Sequence[int], axis: 
 
 
 def save_field(
-    path: str,
-    field: np.ndarray,
+    path: str | os.PathLike[str],
+    field: npt.ArrayLike,
     spacing: float = 1.0,
     mean: float = 0.0,
     scale: float = 1.0,
     clamp_min: float | None = None,
     png_percentiles: tuple[float, float] = (0.5, 99.5),
-) -> dict:
+) -> dict[str, Any]:
     """Write a field; the format comes from the extension.
 
     ``.npy`` (any dims, dtype kept), ``.vol`` (Mitsuba 3 ``gridvolume``,

@@ -14,17 +14,23 @@ family). Images are linear RGB, row 0 at the top.
 from __future__ import annotations
 
 import os
-from typing import Any, Callable, Mapping, Sequence
+from typing import Any, Literal, Mapping, Sequence, Union, cast, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _core
-from ._progress import check_seed, progress_sink
+from ._progress import Progress, check_seed, progress_sink
 
 __all__ = ["render", "write_exr", "write_png"]
 
+#: A rendered image: ``(H, W, 3)`` float32 linear RGB, row 0 at the top.
+Image = npt.NDArray[np.float32]
+#: ``-D``-style overrides: a mapping, or ``"name=value"`` strings, or pairs.
+Defines = Union[Mapping[str, Any], Sequence[Union[str, tuple[Any, Any]]], None]
 
-def _defines_list(defines: Mapping[str, Any] | Sequence[str] | None) -> list[tuple[str, str]]:
+
+def _defines_list(defines: Defines) -> list[tuple[str, str]]:
     if defines is None:
         return []
     if isinstance(defines, Mapping):
@@ -42,15 +48,46 @@ def _defines_list(defines: Mapping[str, Any] | Sequence[str] | None) -> list[tup
     return out
 
 
+@overload
 def render(
-    scene: str | os.PathLike,
+    scene: str | os.PathLike[str],
     spp: int | None = None,
     seed: int | None = None,
     threads: int | None = None,
-    defines: Mapping[str, Any] | Sequence[str] | None = None,
-    progress: bool | Any | Callable[[int, int], None] | None = True,
+    defines: Defines = None,
+    progress: Progress = True,
+    return_variance: Literal[False] = False,
+) -> Image: ...
+@overload
+def render(
+    scene: str | os.PathLike[str],
+    spp: int | None = None,
+    seed: int | None = None,
+    threads: int | None = None,
+    defines: Defines = None,
+    progress: Progress = True,
+    *,
+    return_variance: Literal[True],
+) -> tuple[Image, Image]: ...
+@overload
+def render(
+    scene: str | os.PathLike[str],
+    spp: int | None = None,
+    seed: int | None = None,
+    threads: int | None = None,
+    defines: Defines = None,
+    progress: Progress = True,
     return_variance: bool = False,
-):
+) -> Image | tuple[Image, Image]: ...
+def render(
+    scene: str | os.PathLike[str],
+    spp: int | None = None,
+    seed: int | None = None,
+    threads: int | None = None,
+    defines: Defines = None,
+    progress: Progress = True,
+    return_variance: bool = False,
+) -> Image | tuple[Image, Image]:
     """Render a Mitsuba 3 XML scene file.
 
     Parameters
@@ -104,22 +141,23 @@ def render(
         )
     if interrupted:
         raise KeyboardInterrupt(f"render interrupted after {done} samples per pixel")
-    return (img, var) if return_variance else img
+    # The native call returns a variance exactly when asked for one.
+    return (img, cast(Image, var)) if return_variance else img
 
 
-def _as_image(img) -> np.ndarray:
+def _as_image(img: npt.ArrayLike) -> Image:
     a = np.ascontiguousarray(img, dtype=np.float32)
     if a.ndim != 3 or a.shape[2] != 3:
         raise _core.ParameterError(f"image has shape {a.shape}; expected (H, W, 3)")
     return a
 
 
-def write_exr(path: str | os.PathLike, img) -> None:
+def write_exr(path: str | os.PathLike[str], img: npt.ArrayLike) -> None:
     """Write an ``(H, W, 3)`` image as a linear float32 EXR (atomically)."""
     _core.write_exr(os.fspath(path), _as_image(img))
 
 
-def write_png(path: str | os.PathLike, img, exposure: float = 0.0) -> None:
+def write_png(path: str | os.PathLike[str], img: npt.ArrayLike, exposure: float = 0.0) -> None:
     """Write an ``(H, W, 3)`` linear image as an 8-bit sRGB PNG preview
     (exposure in stops, then clamp, then the sRGB curve), atomically."""
     _core.write_png(os.fspath(path), _as_image(img), float(exposure))

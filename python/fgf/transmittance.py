@@ -46,9 +46,10 @@ True
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any, Callable, Optional, Sequence, Union, cast, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from . import _core
 
@@ -66,8 +67,17 @@ __all__ = [
     "kfbm_point_variance",
 ]
 
+#: What the elementwise methods return for array input.
+FloatArray = npt.NDArray[np.float64]
+# Array input (any shape): the result is an array of that shape. A 0-d array
+# gives a float, like a scalar; the overloads below cannot see ``ndim``, so a
+# 0-d array is typed as giving an array.
+_Array = Union[npt.NDArray[Any], Sequence[Any]]
 
-def _apply(fn, x: Any, *args):
+_F = _core.ModelFunction
+
+
+def _apply(fn: Callable[..., FloatArray], x: npt.ArrayLike, *args: Any) -> Union[float, FloatArray]:
     """Call a native elementwise function ``fn(*args, flat_array)`` on ``x``;
     return a float for scalar input, else an array of ``x``'s shape."""
     a = np.asarray(x, dtype=np.float64)
@@ -83,13 +93,13 @@ class TransmittanceModel:
 
     __slots__ = ("_m",)
 
-    def __init__(self, native: "_core._Model") -> None:
+    def __init__(self, native: _core._Model) -> None:
         self._m = native
 
     @classmethod
-    def _wrap(cls, native: "_core._Model") -> "TransmittanceModel":
+    def _wrap(cls, native: _core._Model) -> TransmittanceModel:
         kind = native.params()["kind"]
-        sub = {
+        sub: type[TransmittanceModel] = {
             "exponential": Exponential,
             "fgf": Fgf,
             "davis": Davis,
@@ -99,7 +109,7 @@ class TransmittanceModel:
         TransmittanceModel.__init__(obj, native)
         return obj
 
-    def _eval(self, what: str, x: Any):
+    def _eval(self, what: _core.ModelFunction, x: npt.ArrayLike) -> Union[float, FloatArray]:
         return _apply(self._m.eval, x, what)
 
     @property
@@ -114,11 +124,17 @@ class TransmittanceModel:
         return self._m.sigma_bar
 
     @property
-    def params(self) -> dict:
+    def params(self) -> dict[str, Any]:
         """The model's kind and constructor parameters."""
         return dict(self._m.params())
 
-    def tr(self, t):
+    @overload
+    def tr(self, t: float) -> float: ...
+    @overload
+    def tr(self, t: _Array) -> FloatArray: ...
+    @overload
+    def tr(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def tr(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """Transmittance ``Tr(t) = T_ss(t)``.
 
         Parameters
@@ -131,9 +147,15 @@ class TransmittanceModel:
         float or numpy.ndarray
             Same shape as ``t``, values in ``[0, 1]``.
         """
-        return self._eval("tr", t)
+        return self._eval(_F.TR, t)
 
-    def pdf(self, t):
+    @overload
+    def pdf(self, t: float) -> float: ...
+    @overload
+    def pdf(self, t: _Array) -> FloatArray: ...
+    @overload
+    def pdf(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def pdf(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """Free-flight pdf from a surface, ``p(t) = -dTr/dt = T_sm(t)`` (1/length).
 
         Parameters
@@ -146,17 +168,35 @@ class TransmittanceModel:
         float or numpy.ndarray
             Same shape as ``t``; integrates to 1 over ``[0, inf)``.
         """
-        return self._eval("pdf", t)
+        return self._eval(_F.PDF, t)
 
-    def surface_surface(self, t):
+    @overload
+    def surface_surface(self, t: float) -> float: ...
+    @overload
+    def surface_surface(self, t: _Array) -> FloatArray: ...
+    @overload
+    def surface_surface(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def surface_surface(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """``T_ss(t) = Tr(t)``: from a surface to a surface. See :meth:`tr`."""
-        return self._eval("surface_surface", t)
+        return self._eval(_F.TR, t)
 
-    def surface_medium(self, t):
+    @overload
+    def surface_medium(self, t: float) -> float: ...
+    @overload
+    def surface_medium(self, t: _Array) -> FloatArray: ...
+    @overload
+    def surface_medium(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def surface_medium(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """``T_sm(t) = -dTr/dt``: from a surface to a medium vertex. See :meth:`pdf`."""
-        return self._eval("surface_medium", t)
+        return self._eval(_F.PDF, t)
 
-    def medium_surface(self, t):
+    @overload
+    def medium_surface(self, t: float) -> float: ...
+    @overload
+    def medium_surface(self, t: _Array) -> FloatArray: ...
+    @overload
+    def medium_surface(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def medium_surface(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """``T_ms(t) = T_sm(t) / sigma_bar``: from a medium vertex to a surface.
 
         Parameters
@@ -169,9 +209,15 @@ class TransmittanceModel:
         float or numpy.ndarray
             Same shape as ``t``, values in ``[0, 1]``.
         """
-        return self._eval("medium_surface", t)
+        return self._eval(_F.MEDIUM_SURFACE, t)
 
-    def medium_medium(self, t):
+    @overload
+    def medium_medium(self, t: float) -> float: ...
+    @overload
+    def medium_medium(self, t: _Array) -> FloatArray: ...
+    @overload
+    def medium_medium(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def medium_medium(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """``T_mm(t) = -dT_ms/dt`` (1/length): free-flight pdf from a medium vertex.
 
         For pink noise (and Davis–Weinstein with ``0.5 < h < 1``) it is
@@ -187,9 +233,15 @@ class TransmittanceModel:
         float or numpy.ndarray
             Same shape as ``t``; integrates to 1 over ``[0, inf)``.
         """
-        return self._eval("medium_medium", t)
+        return self._eval(_F.MEDIUM_MEDIUM, t)
 
-    def sample_surface(self, u):
+    @overload
+    def sample_surface(self, u: float) -> float: ...
+    @overload
+    def sample_surface(self, u: _Array) -> FloatArray: ...
+    @overload
+    def sample_surface(self, u: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def sample_surface(self, u: npt.ArrayLike) -> Union[float, FloatArray]:
         """Free-flight distances from a surface: solve ``1 - T_ss(t) = u``.
 
         Parameters
@@ -204,9 +256,15 @@ class TransmittanceModel:
             Distances, same shape as ``u``; ``inf`` when the distance exceeds
             the float range (extremely heavy tails).
         """
-        return self._eval("sample_surface", u)
+        return self._eval(_F.SAMPLE_SURFACE, u)
 
-    def sample_medium(self, u):
+    @overload
+    def sample_medium(self, u: float) -> float: ...
+    @overload
+    def sample_medium(self, u: _Array) -> FloatArray: ...
+    @overload
+    def sample_medium(self, u: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def sample_medium(self, u: npt.ArrayLike) -> Union[float, FloatArray]:
         """Free-flight distances from a medium vertex: solve ``1 - T_ms(t) = u``.
 
         Parameters
@@ -219,9 +277,9 @@ class TransmittanceModel:
         float or numpy.ndarray
             Distances, same shape as ``u``.
         """
-        return self._eval("sample_medium", u)
+        return self._eval(_F.SAMPLE_MEDIUM, u)
 
-    def __reduce__(self):
+    def __reduce__(self) -> tuple[Callable[[dict[str, Any]], TransmittanceModel], tuple[dict[str, Any]]]:
         # Pickle by constructor parameters (the native object is rebuilt).
         return (_from_params, (self.params,))
 
@@ -236,7 +294,7 @@ class TransmittanceModel:
         return f"{type(self).__name__}({args})"
 
 
-def _from_params(p: dict) -> TransmittanceModel:
+def _from_params(p: dict[str, Any]) -> TransmittanceModel:
     """Rebuild a model from :attr:`TransmittanceModel.params` (for pickle)."""
     kind = p["kind"]
     if kind == "exponential":
@@ -350,7 +408,13 @@ class Fgf(TransmittanceModel):
         """k-fBm order ``k = ceil(H)`` (0 for white and pink noise)."""
         return self._m.params()["k"]
 
-    def variance(self, t):
+    @overload
+    def variance(self, t: float) -> float: ...
+    @overload
+    def variance(self, t: _Array) -> FloatArray: ...
+    @overload
+    def variance(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def variance(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """Variance of the line-averaged extinction ``var[sigma_bar_t]`` (1/length²).
 
         Parameters
@@ -363,9 +427,15 @@ class Fgf(TransmittanceModel):
         float or numpy.ndarray
             Same shape as ``t``.
         """
-        return self._eval("variance", t)
+        return self._eval(_F.VARIANCE, t)
 
-    def alpha(self, t):
+    @overload
+    def alpha(self, t: float) -> float: ...
+    @overload
+    def alpha(self, t: _Array) -> FloatArray: ...
+    @overload
+    def alpha(self, t: npt.ArrayLike) -> Union[float, FloatArray]: ...
+    def alpha(self, t: npt.ArrayLike) -> Union[float, FloatArray]:
         """Gamma shape ``alpha(t) = sigma_t**2 / variance(t)`` (dimensionless).
 
         Parameters
@@ -378,17 +448,17 @@ class Fgf(TransmittanceModel):
         float or numpy.ndarray
             Same shape as ``t``; constant for k-fBm, 0 at ``t = 0`` otherwise.
         """
-        return self._eval("alpha", t)
+        return self._eval(_F.ALPHA, t)
 
     def to_davis(self) -> "Davis":
         """The equal :class:`Davis` model, ``alpha = sigma_t**2 / (S_kf L**(2H))``
         (k-fBm only; :class:`fgf.ParameterError` otherwise)."""
-        return TransmittanceModel._wrap(self._m.to_davis())  # type: ignore[return-value]
+        return cast(Davis, TransmittanceModel._wrap(self._m.to_davis()))
 
     def to_davis_weinstein(self) -> "DavisWeinstein":
         """The equal :class:`DavisWeinstein` model, ``h = H + 1``,
         ``c = S_p**(1/(2H+2)) / sigma_t`` (white or pink noise only)."""
-        return TransmittanceModel._wrap(self._m.to_davis_weinstein())  # type: ignore[return-value]
+        return cast(DavisWeinstein, TransmittanceModel._wrap(self._m.to_davis_weinstein()))
 
 
 class Davis(TransmittanceModel):
@@ -464,7 +534,17 @@ class DavisWeinstein(TransmittanceModel):
 # --- statistics (theory.md §1-2) ---
 
 
-def line_average_variance(hurst: float, sw: float, t, length: Optional[float] = None):
+@overload
+def line_average_variance(hurst: float, sw: float, t: float, length: Optional[float] = None) -> float: ...
+@overload
+def line_average_variance(hurst: float, sw: float, t: _Array, length: Optional[float] = None) -> FloatArray: ...
+@overload
+def line_average_variance(
+    hurst: float, sw: float, t: npt.ArrayLike, length: Optional[float] = None
+) -> Union[float, FloatArray]: ...
+def line_average_variance(
+    hurst: float, sw: float, t: npt.ArrayLike, length: Optional[float] = None
+) -> Union[float, FloatArray]:
     """Variance of the line-averaged extinction ``var[sigma_bar_t]``.
 
     ``S_w / t`` (white, ``hurst = -0.5``), ``S_p t**(2H)`` (pink),
@@ -534,7 +614,13 @@ def binom(a: float, k: int) -> float:
     return _core.binom(float(a), int(k))
 
 
-def kfbm_point_variance(hurst: float, sw: float, x):
+@overload
+def kfbm_point_variance(hurst: float, sw: float, x: float) -> float: ...
+@overload
+def kfbm_point_variance(hurst: float, sw: float, x: _Array) -> FloatArray: ...
+@overload
+def kfbm_point_variance(hurst: float, sw: float, x: npt.ArrayLike) -> Union[float, FloatArray]: ...
+def kfbm_point_variance(hurst: float, sw: float, x: npt.ArrayLike) -> Union[float, FloatArray]:
     """Point variance of the anchored k-fBm,
     ``2 C(H,1) S_w (-1)**k binom(2H-1, k-1) |x|**(2H)``.
 

@@ -1,5 +1,6 @@
 //! Python bindings for the transmittance area: one native class `_Model`
-//! wrapping `fgf_core::transmittance::Model`, and the statistics functions
+//! wrapping `fgf_core::transmittance::Model` (its `eval` takes a
+//! [`ModelFunction`] member), and the statistics functions
 //! of `fgf_core::stats`. The typed public classes (`fgf.Fgf`, ...) live in
 //! `python/fgf/transmittance.py`; this file only converts types, releases
 //! the GIL for large arrays and maps `ParamError` to `fgf.ParameterError`.
@@ -41,6 +42,38 @@ fn check_unit(us: &[f64]) -> PyResult<()> {
     Ok(())
 }
 
+/// The function of a model that `_Model.eval` maps over an array. The
+/// Python layer picks the member once per method (`fgf.transmittance`), so
+/// no string is parsed per call.
+#[pyclass(name = "ModelFunction", module = "fgf._core", eq, eq_int, frozen)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum ModelFunction {
+    /// `Tr = T_ss`.
+    #[pyo3(name = "TR")]
+    Tr,
+    /// `p = T_sm = -dTr/dt`.
+    #[pyo3(name = "PDF")]
+    Pdf,
+    /// `T_ms = T_sm / σ̄`.
+    #[pyo3(name = "MEDIUM_SURFACE")]
+    MediumSurface,
+    /// `T_mm = -dT_ms/dt`.
+    #[pyo3(name = "MEDIUM_MEDIUM")]
+    MediumMedium,
+    /// Inverse of the cdf `1 - T_ss` (variates in `[0, 1)`).
+    #[pyo3(name = "SAMPLE_SURFACE")]
+    SampleSurface,
+    /// Inverse of the cdf `1 - T_ms` (variates in `[0, 1)`).
+    #[pyo3(name = "SAMPLE_MEDIUM")]
+    SampleMedium,
+    /// `var[σ̄_t]` (Fgf models only).
+    #[pyo3(name = "VARIANCE")]
+    Variance,
+    /// `α(t) = σ_m² / var[σ̄_t]` (Fgf models only).
+    #[pyo3(name = "ALPHA")]
+    Alpha,
+}
+
 /// A transmittance model (native part of `fgf.Exponential`, `fgf.Fgf`,
 /// `fgf.Davis`, `fgf.DavisWeinstein`).
 #[pyclass(name = "_Model", module = "fgf._core", frozen)]
@@ -75,40 +108,41 @@ impl PyModel {
         Ok(PyModel { m: m.into() })
     }
 
-    /// Evaluate `what` (`tr`, `pdf`, `surface_surface`, `surface_medium`,
-    /// `medium_surface`, `medium_medium`, `sample_surface`, `sample_medium`,
-    /// and for Fgf `variance`, `alpha`) elementwise over a 1-D contiguous
-    /// float64 array.
+    /// Evaluate `what` elementwise over a 1-D contiguous float64 array.
     fn eval<'py>(
         &self,
         py: Python<'py>,
-        what: &str,
+        what: ModelFunction,
         x: PyReadonlyArray1<'py, f64>,
     ) -> PyResult<Bound<'py, PyArray1<f64>>> {
         let m = self.m;
         match what {
-            "tr" | "surface_surface" => map_array(py, &x, |t| m.tr(t)),
-            "pdf" | "surface_medium" => map_array(py, &x, |t| m.pdf(t)),
-            "medium_surface" => map_array(py, &x, |t| m.medium_surface(t)),
-            "medium_medium" => map_array(py, &x, |t| m.medium_medium(t)),
-            "sample_surface" => {
+            ModelFunction::Tr => map_array(py, &x, |t| m.tr(t)),
+            ModelFunction::Pdf => map_array(py, &x, |t| m.pdf(t)),
+            ModelFunction::MediumSurface => map_array(py, &x, |t| m.medium_surface(t)),
+            ModelFunction::MediumMedium => map_array(py, &x, |t| m.medium_medium(t)),
+            ModelFunction::SampleSurface => {
                 check_unit(x.as_slice()?)?;
                 map_array(py, &x, |u| m.sample_surface(u))
             }
-            "sample_medium" => {
+            ModelFunction::SampleMedium => {
                 check_unit(x.as_slice()?)?;
                 map_array(py, &x, |u| m.sample_medium(u))
             }
-            "variance" | "alpha" => match m {
-                Model::Fgf(f) if what == "variance" => map_array(py, &x, |t| f.variance(t)),
+            ModelFunction::Variance | ModelFunction::Alpha => match m {
+                Model::Fgf(f) if what == ModelFunction::Variance => {
+                    map_array(py, &x, |t| f.variance(t))
+                }
                 Model::Fgf(f) => map_array(py, &x, |t| f.alpha(t)),
                 _ => Err(pyo3::exceptions::PyTypeError::new_err(format!(
-                    "{what} is defined for Fgf models only"
+                    "{} is defined for Fgf models only",
+                    if what == ModelFunction::Variance {
+                        "variance"
+                    } else {
+                        "alpha"
+                    }
                 ))),
             },
-            _ => Err(pyo3::exceptions::PyValueError::new_err(format!(
-                "unknown function {what:?}"
-            ))),
         }
     }
 
@@ -282,6 +316,7 @@ fn line_average_variance<'py>(
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<PyModel>()?;
+    m.add_class::<ModelFunction>()?;
     m.add_function(wrap_pyfunction!(c_const, m)?)?;
     m.add_function(wrap_pyfunction!(s_p, m)?)?;
     m.add_function(wrap_pyfunction!(s_kf, m)?)?;

@@ -8,13 +8,14 @@ of outputs.
 
 from __future__ import annotations
 
+import argparse
 import math
 from pathlib import Path
 
 SEED_MAX = 2**64 - 1
 
 
-def add_scene_options(p) -> None:
+def add_scene_options(p: argparse.ArgumentParser) -> None:
     """``--threads``, ``-D``, ``--png``, ``--exposure``, ``--quiet``."""
     p.add_argument("--threads", type=int, default=None, help="worker threads (default: all cores)")
     p.add_argument(
@@ -40,7 +41,7 @@ def _check_output(option: str, path: Path, suffix: str) -> None:
         raise ParameterError(f"{option} {path}: the directory {parent} does not exist")
 
 
-def check_scene_options(args, extra_exr: dict[str, str | None]) -> tuple[Path, Path]:
+def check_scene_options(args: argparse.Namespace, extra_exr: dict[str, str | None]) -> tuple[Path, Path]:
     """Validate the shared options and every output path; return ``(exr, png)``.
 
     ``extra_exr`` maps an option name (``--variance``, ``--stderr``) to its

@@ -15,13 +15,14 @@ the average of the realizations finished so far (exit code 130).
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 
 from ._scene_args import add_scene_options, check_scene_options
 
 
-def register(sub) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "ensemble",
         help="ground truth: average classical renders of explicit realizations of the fgf media",
@@ -40,7 +41,7 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from .. import ParameterError, _core
     from ..render import _defines_list
 

@@ -22,7 +22,7 @@ import argparse
 import sys
 
 
-def register(sub) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "field",
         help="synthesize a fractional Gaussian field (.npy/.vol/.exr/.png)",
@@ -57,7 +57,7 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _anchor(text: str):
+def _anchor(text: str) -> str | list[int]:
     from .. import ParameterError
 
     t = text.strip().lower()
@@ -71,7 +71,7 @@ def _anchor(text: str):
         ) from None
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .. import FgfError, field

@@ -15,10 +15,11 @@ stderr and in the gallery); 2 on bad arguments or I/O errors.
 
 from __future__ import annotations
 
+import argparse
 import sys
 
 
-def register(sub) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from ..figures import GROUPS
 
     p = sub.add_parser(
@@ -46,7 +47,7 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     import errno
     import os
     import time
@@ -56,10 +57,10 @@ def run(args) -> int:
     if args.scene_dir is not None and not os.path.isdir(args.scene_dir):
         # Checked before any figure is made: a typo should not cost the
         # minutes of the other groups and then end as a "not made" line.
-        missing = not os.path.exists(args.scene_dir)
-        err = FileNotFoundError if missing else NotADirectoryError
-        what = "no such directory" if missing else "not a directory"
-        raise err(errno.ENOENT if missing else errno.ENOTDIR, f"--scene-dir: {what}", args.scene_dir)
+        absent = not os.path.exists(args.scene_dir)
+        err = FileNotFoundError if absent else NotADirectoryError
+        what = "no such directory" if absent else "not a directory"
+        raise err(errno.ENOENT if absent else errno.ENOTDIR, f"--scene-dir: {what}", args.scene_dir)
     start = time.perf_counter()
     report = make_figures(
         args.out,

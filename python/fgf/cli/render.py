@@ -10,13 +10,14 @@ many; the exit code is then 130.
 
 from __future__ import annotations
 
+import argparse
 import sys
 import time
 
 from ._scene_args import add_scene_options, check_scene_options
 
 
-def register(sub) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "render",
         help="render a Mitsuba 3 XML scene (volumetric path tracing)",
@@ -31,7 +32,7 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     from .. import _core
     from ..render import _defines_list
 

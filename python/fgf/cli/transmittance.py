@@ -15,17 +15,25 @@ written atomically (a temporary file in the same folder, then renamed).
 
 from __future__ import annotations
 
+import argparse
 import math
 import os
 import sys
+from typing import IO, TYPE_CHECKING
 
 from .._atomic import write_atomic
+
+if TYPE_CHECKING:
+    import numpy as np
+    import numpy.typing as npt
+
+    from ..transmittance import Exponential, Fgf
 
 PLOT_EXTS = (".png", ".pdf", ".svg")
 TABLE_EXTS = (".csv",)
 
 
-def register(sub) -> None:
+def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "transmittance",
         help="tabulate/plot the FGF transmittance Tr(t) against the exponential",
@@ -55,7 +63,7 @@ def register(sub) -> None:
     p.set_defaults(func=run)
 
 
-def _check(args) -> None:
+def _check(args: argparse.Namespace) -> None:
     from .. import ParameterError
 
     if not (math.isfinite(args.t_max) and args.t_max > 0):
@@ -66,14 +74,14 @@ def _check(args) -> None:
         raise ParameterError(f"invalid --points = {args.points}: need at least 2 (valid: points >= 2)")
 
 
-def _describe(m) -> str:
+def _describe(m: Fgf) -> str:
     p = m.params
     extra = f", length={p['length']:g}" if p["length"] is not None else ""
     name = {"white": "white noise", "pink": "pink noise", "k-fbm": f"{p['k']}-fBm"}[p["regime"]]
     return f"Fgf {name}: sigma_t={p['sigma_t']:g}, hurst={p['hurst']:g}, sw={p['sw']:g}{extra}"
 
 
-def _columns(m, e, t):
+def _columns(m: Fgf, e: Exponential, t: npt.NDArray[np.float64]) -> dict[str, npt.NDArray[np.float64]]:
     return {
         "t": t,
         "tr": m.tr(t),
@@ -86,19 +94,19 @@ def _columns(m, e, t):
     }
 
 
-def _write_csv(path: str, cols: dict) -> None:
+def _write_csv(path: str, cols: dict[str, npt.NDArray[np.float64]]) -> None:
     import numpy as np
 
     names = list(cols)
     data = np.column_stack([cols[n] for n in names])
 
-    def write(fh):
+    def write(fh: IO[bytes]) -> None:
         np.savetxt(fh, data, delimiter=",", header=",".join(names), comments="", fmt="%.17g")
 
     write_atomic(path, write)
 
 
-def _write_plot(path: str, m, e, t, title: str) -> None:
+def _write_plot(path: str, m: Fgf, e: Exponential, t: npt.NDArray[np.float64], title: str) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -123,7 +131,7 @@ def _write_plot(path: str, m, e, t, title: str) -> None:
 
     fmt = os.path.splitext(path)[1].lstrip(".").lower()
 
-    def write(fh):
+    def write(fh: IO[bytes]) -> None:
         fig.savefig(fh, format=fmt)
 
     try:
@@ -132,7 +140,7 @@ def _write_plot(path: str, m, e, t, title: str) -> None:
         plt.close(fig)
 
 
-def run(args) -> int:
+def run(args: argparse.Namespace) -> int:
     import numpy as np
 
     from .. import Exponential, Fgf, FgfError

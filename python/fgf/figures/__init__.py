@@ -47,10 +47,11 @@ from __future__ import annotations
 import html
 import json
 import math
+import os
 import sys
 import time
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable, Protocol, Union, cast
 
 from ._common import Context, GroupResult, Unavailable, write_atomic
 from . import comparisons, ensemble, family, renders, transmittance, variance
@@ -72,7 +73,19 @@ GROUPS = {
 DEFAULT_SCENE_DIR = Path(__file__).resolve().parents[3] / "scenes" / "figures"
 
 
-def _progress_bar(progress, total: int, label: str):
+class ProgressBar(Protocol):
+    """What a figure group reports its steps to (a tqdm bar has both methods)."""
+
+    def update(self, n: int = 1, /) -> object: ...
+
+    def close(self) -> object: ...
+
+
+#: ``progress=`` of :func:`make_figures`.
+FiguresProgress = Union[bool, None, ProgressBar, Callable[[str, int, int], object]]
+
+
+def _progress_bar(progress: FiguresProgress, total: int, label: str) -> ProgressBar:
     """A per-group progress sink with ``update(n)`` and ``close()``.
 
     ``progress`` is True (a tqdm bar, only when stderr is a terminal), a
@@ -81,10 +94,10 @@ def _progress_bar(progress, total: int, label: str):
     """
 
     class _Quiet:
-        def update(self, n=1):
+        def update(self, n: int = 1, /) -> None:
             pass
 
-        def close(self):
+        def close(self) -> None:
             pass
 
     if not progress:
@@ -96,16 +109,17 @@ def _progress_bar(progress, total: int, label: str):
 
         return tqdm(total=total, desc=label, leave=True, file=sys.stderr)
     if hasattr(progress, "update"):
-        return progress
+        return cast(ProgressBar, progress)
+    call = progress
 
     class _Call:
         done = 0
 
-        def update(self, n=1):
+        def update(self, n: int = 1, /) -> None:
             self.done += n
-            progress(label, self.done, total)
+            call(label, self.done, total)
 
-        def close(self):
+        def close(self) -> None:
             pass
 
     return _Call()
@@ -130,13 +144,13 @@ def _check_finite(obj: Any, where: str) -> None:
 
 
 def make_figures(
-    out,
+    out: str | os.PathLike[str],
     quick: bool = False,
     seed: int = 2019,
     groups: Iterable[str] | None = None,
-    progress=True,
-    scene_dir=None,
-) -> dict:
+    progress: FiguresProgress = True,
+    scene_dir: str | os.PathLike[str] | None = None,
+) -> dict[str, Any]:
     """Make the figures, the gallery and ``results.json`` in ``out``.
 
     Parameters
@@ -183,7 +197,11 @@ def make_figures(
     for name in names:
         mod = GROUPS[name]
         bar = _progress_bar(progress, mod.steps(quick), name)
-        ctx = Context(out=out, quick=quick, seed=seed, tick=lambda b=bar: b.update(1), scene_dir=scene_dir)
+
+        def tick(b: ProgressBar = bar) -> None:
+            b.update(1)
+
+        ctx = Context(out=out, quick=quick, seed=seed, tick=tick, scene_dir=scene_dir)
         start = time.perf_counter()
         try:
             res: GroupResult = mod.run(ctx)
@@ -213,7 +231,7 @@ def make_figures(
     return report
 
 
-def _write_outputs(out: Path, report: dict) -> None:
+def _write_outputs(out: Path, report: dict[str, Any]) -> None:
     text = json.dumps(report, indent=1, allow_nan=False)
     write_atomic(out / "results.json", lambda fh: fh.write(text), mode="w")
     page = gallery_html(report)
@@ -230,7 +248,7 @@ figcaption { font-size: 0.92em; color: #444; margin-top: 0.3em; }
 """
 
 
-def gallery_html(report: dict) -> str:
+def gallery_html(report: dict[str, Any]) -> str:
     """The self-contained gallery page for ``report`` (the results dict)."""
     e = html.escape
     parts = [

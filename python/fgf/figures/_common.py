@@ -10,11 +10,28 @@ from __future__ import annotations
 
 import dataclasses
 from pathlib import Path
-from typing import Any, Callable
+from typing import TYPE_CHECKING, Any, Callable
 
 import numpy as np
+import numpy.typing as npt
 
-from .._atomic import write_atomic  # noqa: F401  (used by the figure modules)
+from .._atomic import write_atomic
+
+if TYPE_CHECKING:
+    from matplotlib.figure import Figure as MplFigure
+
+__all__ = [
+    "Unavailable",
+    "need",
+    "Figure",
+    "GroupResult",
+    "Context",
+    "save_figure",
+    "new_figure",
+    "floats",
+    "srgb_preview",
+    "write_atomic",  # re-exported for the figure modules
+]
 
 
 class Unavailable(RuntimeError):
@@ -72,14 +89,14 @@ class Context:
     scene_dir: Path
 
 
-def save_figure(fig, out: Path, name: str) -> str:
+def save_figure(fig: MplFigure, out: Path, name: str) -> str:
     """Save a matplotlib figure as ``out/name`` atomically (temporary file in
     the same directory, then ``os.replace``): an interrupted run never leaves
     a half-written PNG and never destroys a previous one."""
     return write_atomic(out / name, lambda fh: fig.savefig(fh, format="png", dpi=fig.dpi))
 
 
-def new_figure(width: float, height: float):
+def new_figure(width: float, height: float) -> MplFigure:
     """A matplotlib figure drawn by the Agg canvas, without pyplot's global
     state (safe to use from a library and in tests)."""
     from matplotlib.figure import Figure as MplFigure
@@ -87,14 +104,16 @@ def new_figure(width: float, height: float):
     return MplFigure(figsize=(width, height), dpi=100, layout="constrained")
 
 
-def floats(a) -> list:
-    """A numpy array (any shape) as nested lists of Python floats for JSON."""
+def floats(a: npt.ArrayLike) -> Any:
+    """A numpy array (any shape) as nested lists of Python floats for JSON
+    (a float for a 0-d array)."""
     return np.asarray(a, dtype=float).tolist()
 
 
-def srgb_preview(img: np.ndarray, exposure: float = 0.0) -> np.ndarray:
+def srgb_preview(img: npt.ArrayLike, exposure: float = 0.0) -> npt.NDArray[np.float64]:
     """Display mapping of a linear RGB render: exposure (stops), clamp to
     [0, 1], then the sRGB transfer curve (the same order as fgf's PNG
     preview, formats.md "Output images")."""
     x = np.clip(np.asarray(img, dtype=np.float64) * 2.0**exposure, 0.0, 1.0)
-    return np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1.0 / 2.4) - 0.055)
+    out: npt.NDArray[np.float64] = np.where(x <= 0.0031308, 12.92 * x, 1.055 * x ** (1.0 / 2.4) - 0.055)
+    return out

@@ -22,7 +22,10 @@ level Monte Carlo noise alone would give (:func:`noise_level`).
 
 from __future__ import annotations
 
+from typing import Any, Sequence
+
 import numpy as np
+import numpy.typing as npt
 
 from ._common import Context, Figure, GroupResult, need, new_figure, save_figure, srgb_preview
 from .renders import CUBE_DIAGONAL, EXPOSURE, SIGMA_M, SW_RENDER, defines_for, image_stats, render, settings
@@ -50,7 +53,11 @@ def noise_level(var_a: np.ndarray, var_b: np.ndarray, b: np.ndarray) -> float:
     return float(np.sqrt(2.0 / np.pi) * np.sqrt(var_a + var_b).sum() / den) if den > 0 else 0.0
 
 
-def _rows_figure(ctx, rows, name: str, title: str, caption: str) -> Figure:
+#: One row of a comparison figure: (label_a, img_a, label_b, img_b, row_title).
+Row = tuple[str, npt.NDArray[np.float64], str, npt.NDArray[np.float64], str]
+
+
+def _rows_figure(ctx: Context, rows: Sequence[Row], name: str, title: str, caption: str) -> Figure:
     """rows: (label_a, img_a, label_b, img_b, row_title) -> a 3-column grid."""
     fig = new_figure(10, 3.3 * len(rows))
     axes = np.atleast_2d(fig.subplots(len(rows), 3))
@@ -69,7 +76,7 @@ def _rows_figure(ctx, rows, name: str, title: str, caption: str) -> Figure:
     return Figure(save_figure(fig, ctx.out, name), title, caption)
 
 
-def _kernels(ctx: Context, res: dict) -> Figure:
+def _kernels(ctx: Context, res: dict[str, Any]) -> Figure:
     seed = ctx.seed + 600
     rows = []
     for hurst in (-0.1, 1.2):
@@ -103,7 +110,7 @@ def _kernels(ctx: Context, res: dict) -> Figure:
     )
 
 
-def _bitterli(ctx: Context, res: dict) -> Figure:
+def _bitterli(ctx: Context, res: dict[str, Any]) -> Figure:
     seed = ctx.seed + 700
     Fgf = need("Fgf")
     rows = []
@@ -157,6 +164,6 @@ def _bitterli(ctx: Context, res: dict) -> Figure:
 
 
 def run(ctx: Context) -> GroupResult:
-    res: dict = {"kernels": {}, "bitterli": {}}
+    res: dict[str, Any] = {"kernels": {}, "bitterli": {}}
     figs = [_kernels(ctx, res["kernels"]), _bitterli(ctx, res["bitterli"])]
     return GroupResult(figs, res)

@@ -23,6 +23,8 @@ discusses the outcome.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 from ._common import Context, Figure, GroupResult, Unavailable, need
@@ -46,7 +48,7 @@ def steps(quick: bool) -> int:
     return 2 * len(ENSEMBLE_CASES)
 
 
-def _mean_z(name: str, img: np.ndarray, var: np.ndarray, mean: np.ndarray, se: np.ndarray) -> dict:
+def _mean_z(name: str, img: np.ndarray, var: np.ndarray, mean: np.ndarray, se: np.ndarray) -> dict[str, Any]:
     """Relative difference of the image means of a render and the ensemble,
     and a conservative z-score for it.
 
@@ -64,7 +66,7 @@ def _mean_z(name: str, img: np.ndarray, var: np.ndarray, mean: np.ndarray, se: n
     }
 
 
-def _ensemble(ctx: Context, res: dict) -> Figure:
+def _ensemble(ctx: Context, res: dict[str, Any]) -> Figure:
     import fgf
 
     ensemble = need("ensemble")
@@ -140,5 +142,5 @@ def _ensemble(ctx: Context, res: dict) -> Figure:
 
 
 def run(ctx: Context) -> GroupResult:
-    res: dict = {}
+    res: dict[str, Any] = {}
     return GroupResult([_ensemble(ctx, res)], res)

@@ -22,7 +22,10 @@
 
 from __future__ import annotations
 
+from typing import Any, Union, cast
+
 import numpy as np
+import numpy.typing as npt
 
 from ._common import Context, Figure, GroupResult, floats, need, new_figure, save_figure
 
@@ -38,12 +41,16 @@ def steps(quick: bool) -> int:
     return len(HURST_COV) + len(HURST_2D)
 
 
-def kfbm_covariance(hurst: float, sw: float, x: np.ndarray, y: np.ndarray) -> np.ndarray:
+#: Positions or covariances: a float64 scalar or array.
+Floats = Union[np.float64, npt.NDArray[np.float64]]
+
+
+def kfbm_covariance(hurst: float, sw: float, x: Floats, y: Floats) -> Floats:
     """Covariance of the 1D k-fBm anchored at 0, for x, y > 0 (theory.md §1:
     the covariance of M minus its Taylor polynomial of degree k-1 at 0)."""
     from scipy.special import binom
 
-    c = need("c_const")(hurst, 1)
+    c: float = need("c_const")(hurst, 1)
     k = int(np.ceil(hurst))
     a = 2.0 * hurst
     v = np.abs(x - y) ** a
@@ -52,27 +59,28 @@ def kfbm_covariance(hurst: float, sw: float, x: np.ndarray, y: np.ndarray) -> np
     return c * sw * v
 
 
-def pink_cell_covariance(hurst: float, sw: float, n: int) -> np.ndarray:
+def pink_cell_covariance(hurst: float, sw: float, n: int) -> npt.NDArray[np.float64]:
     """Covariance matrix of the averages of pink (or white) noise over n
     cells of [0, 1] (see the module docs)."""
     dx = 1.0 / n
     v_dx = float(need("line_average_variance")(hurst, sw, dx))
     two_h = 2.0 * (hurst + 1.0)
     j = np.abs(np.subtract.outer(np.arange(n), np.arange(n))).astype(float)
-    return v_dx * 0.5 * ((j + 1) ** two_h - 2 * j**two_h + np.abs(j - 1) ** two_h)
+    cov: npt.NDArray[np.float64] = v_dx * 0.5 * ((j + 1) ** two_h - 2 * j**two_h + np.abs(j - 1) ** two_h)
+    return cov
 
 
-def _paths(samples) -> np.ndarray:
+def _paths(samples: Any) -> npt.NDArray[np.float64]:
     """``(n_paths, n_steps+1)`` array of the paths returned by an exact 1D
     sampler (an array, or an object/tuple holding ``values``)."""
     if isinstance(samples, tuple):
         # (values, t) or (t, values): the paths are the 2D member.
-        samples = next(s for s in samples if np.ndim(getattr(s, "values", s)) == 2)
+        samples = next(s for s in samples if np.ndim(cast(Any, getattr(s, "values", s))) == 2)
     values = getattr(samples, "values", samples)
     return np.asarray(values, dtype=np.float64)
 
 
-def _covariance_images(ctx: Context, res: dict) -> Figure:
+def _covariance_images(ctx: Context, res: dict[str, Any]) -> Figure:
     n = 48 if ctx.quick else 96
     n_paths = 2000 if ctx.quick else 20000
     sw = 1.0
@@ -80,6 +88,7 @@ def _covariance_images(ctx: Context, res: dict) -> Figure:
     axes = fig.subplots(2, len(HURST_COV))
     for col, hurst in enumerate(HURST_COV):
         seed = ctx.seed + 100 + col
+        cov: Floats
         if hurst < 0:
             cov = pink_cell_covariance(hurst, sw, n)
             # Cell averages from the exact optical depth: (τ(x_{i+1}) - τ(x_i)) / dx.
@@ -130,7 +139,7 @@ def _covariance_images(ctx: Context, res: dict) -> Figure:
     )
 
 
-def _realizations_2d(ctx: Context, res: dict) -> Figure:
+def _realizations_2d(ctx: Context, res: dict[str, Any]) -> Figure:
     n = 128 if ctx.quick else 512
     sw = 1.0
     synthesize = need("synthesize")
@@ -166,6 +175,6 @@ def _realizations_2d(ctx: Context, res: dict) -> Figure:
 
 
 def run(ctx: Context) -> GroupResult:
-    res: dict = {"covariance": {}, "realizations_2d": {}}
+    res: dict[str, Any] = {"covariance": {}, "realizations_2d": {}}
     figs = [_covariance_images(ctx, res["covariance"]), _realizations_2d(ctx, res["realizations_2d"])]
     return GroupResult(figs, res)

@@ -18,8 +18,10 @@ RGB and its mean relative to the exponential render.
 from __future__ import annotations
 
 import math
+from typing import Any, Literal, overload
 
 import numpy as np
+import numpy.typing as npt
 
 from ._common import Context, Figure, GroupResult, Unavailable, floats, need, new_figure, save_figure, srgb_preview
 
@@ -43,7 +45,7 @@ def steps(quick: bool) -> int:
     return 1 + len(HURSTS)
 
 
-def settings(quick: bool) -> dict:
+def settings(quick: bool) -> dict[str, Any]:
     """Resolution and samples per pixel of the render groups."""
     return {"res": 48, "spp": 16} if quick else {"res": 256, "spp": 256}
 
@@ -62,7 +64,7 @@ def sw_for(hurst: float, alpha_ref: float) -> float:
     return SIGMA_M**2 / (alpha_ref * v1)
 
 
-def defines_for(medium: str, **params) -> dict:
+def defines_for(medium: str, **params: float | str) -> dict[str, Any]:
     """String defines for the figure scene (numbers with full precision)."""
     d = {"medium": medium, "sigma_t": repr(SIGMA_M), "albedo": repr(ALBEDO)}
     for k, v in params.items():
@@ -70,7 +72,19 @@ def defines_for(medium: str, **params) -> dict:
     return d
 
 
-def render(ctx: Context, defines: dict, seed: int, spp: int | None = None, return_variance: bool = False):
+#: A render as float64 ``(H, W, 3)``.
+Img = npt.NDArray[np.float64]
+
+
+@overload
+def render(
+    ctx: Context, defines: dict[str, Any], seed: int, spp: int | None = None, return_variance: Literal[False] = False
+) -> Img: ...
+@overload
+def render(ctx: Context, defines: dict[str, Any], seed: int, spp: int | None = None, *, return_variance: Literal[True]) -> tuple[Img, Img]: ...
+def render(
+    ctx: Context, defines: dict[str, Any], seed: int, spp: int | None = None, return_variance: bool = False
+) -> Img | tuple[Img, Img]:
     """Render the figure scene with ``defines``; a failure of the renderer on
     this (valid) scene means the build lacks a feature, so it makes the
     group unavailable with the renderer's message."""
@@ -98,7 +112,7 @@ def render(ctx: Context, defines: dict, seed: int, spp: int | None = None, retur
     return img[..., :3]
 
 
-def image_stats(img: np.ndarray) -> dict:
+def image_stats(img: np.ndarray) -> dict[str, Any]:
     return {
         "mean_rgb": floats(img.reshape(-1, 3).mean(axis=0)),
         "mean": float(img.mean()),
@@ -110,7 +124,7 @@ def image_stats(img: np.ndarray) -> dict:
 def run(ctx: Context) -> GroupResult:
     s = settings(ctx.quick)
     seed = ctx.seed + 500
-    panels = [("exponential", render(ctx, defines_for("homogeneous"), seed), {})]
+    panels: list[tuple[str, Img, dict[str, float]]] = [("exponential", render(ctx, defines_for("homogeneous"), seed), {})]
     ctx.tick()
     for hurst in HURSTS:
         sw = SW_RENDER
@@ -118,7 +132,7 @@ def run(ctx: Context) -> GroupResult:
         kind = "pink noise" if hurst < 0 else f"{int(np.ceil(hurst))}-fBm"
         panels.append((f"H = {hurst} ({kind})", img, {"hurst": hurst, "sw": sw, "alpha_at_1": alpha_at_1(hurst, sw)}))
         ctx.tick()
-    res: dict = {"sigma_m": SIGMA_M, "albedo": ALBEDO, "sw": SW_RENDER, **s, "images": {}}
+    res: dict[str, Any] = {"sigma_m": SIGMA_M, "albedo": ALBEDO, "sw": SW_RENDER, **s, "images": {}}
     base = panels[0][1].mean()
     fig = new_figure(3.2 * len(panels), 4.0)
     axes = fig.subplots(1, len(panels))

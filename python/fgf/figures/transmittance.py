@@ -31,10 +31,15 @@ error measures nothing useful).
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any, cast
+
 import numpy as np
 
 from ._common import Context, Figure, GroupResult, floats, need, new_figure, save_figure
 from .family import _paths
+
+if TYPE_CHECKING:
+    from ..transmittance import Fgf
 
 TITLE = "3. Transmittance: from exponential to transparent; model vs realizations"
 
@@ -66,14 +71,14 @@ def sw_for_alpha(hurst: float, alpha_ref: float, length: float | None = None) ->
     return SIGMA_M**2 / (alpha_ref * v1)
 
 
-def _model(hurst: float, sw: float, length: float | None = None):
-    Fgf = need("Fgf")
+def _model(hurst: float, sw: float, length: float | None = None) -> Fgf:
+    model = need("Fgf")
     if hurst > 0:
-        return Fgf(SIGMA_M, hurst=hurst, sw=sw, length=length)
-    return Fgf(SIGMA_M, hurst=hurst, sw=sw)
+        return cast("Fgf", model(SIGMA_M, hurst=hurst, sw=sw, length=length))
+    return cast("Fgf", model(SIGMA_M, hurst=hurst, sw=sw))
 
 
-def _curves(ctx: Context, res: dict):
+def _curves(ctx: Context, res: dict[str, Any]) -> Figure:
     t = np.linspace(0.0, 8.0, 161)
     fig = new_figure(12, 4.6)
     ax1, ax2, ax3 = fig.subplots(1, 3)
@@ -138,7 +143,7 @@ def _realizations(hurst: float, sw: float, n: int, n_steps: int, seed: int) -> n
     return tau
 
 
-def _compare(ctx: Context, res: dict):
+def _compare(ctx: Context, res: dict[str, Any]) -> Figure:
     n = 2000 if ctx.quick else 20000
     n_steps = 200 if ctx.quick else 400
     t = np.arange(n_steps + 1) * (T_MAX / n_steps)
@@ -213,6 +218,6 @@ def _compare(ctx: Context, res: dict):
 
 
 def run(ctx: Context) -> GroupResult:
-    res: dict = {"models": {}, "vs_realizations": {}}
+    res: dict[str, Any] = {"models": {}, "vs_realizations": {}}
     figs = [_curves(ctx, res["models"]), _compare(ctx, res["vs_realizations"])]
     return GroupResult(figs, res)

@@ -31,10 +31,15 @@ Three independent routes to the same number:
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING, Any
+
 import numpy as np
 
 from ._common import Context, Figure, GroupResult, floats, need, new_figure, save_figure
 from .family import _paths, kfbm_covariance
+
+if TYPE_CHECKING:
+    from matplotlib.axes import Axes
 
 TITLE = "2. Numerical verification of var[σ̄_t]"
 
@@ -53,7 +58,7 @@ def quad_pink(hurst: float, sw: float, t: float) -> float:
     """(1/t²)∫∫ cov over [0,t]² by QAWS quadrature (see the module docs)."""
     from scipy.integrate import quad
 
-    c = need("c_const")(hurst, 1)
+    c: float = need("c_const")(hurst, 1)
     val, _err = quad(lambda u: t - u, 0.0, t, weight="alg", wvar=(2.0 * hurst, 0.0), epsabs=0.0, epsrel=1e-12)
     return 2.0 * c * sw * val / t**2
 
@@ -63,14 +68,14 @@ def quad_kfbm(hurst: float, sw: float, length: float) -> float:
     as x^(2H) at 0, integrable for H > 0 (``points`` helps QUADPACK there)."""
     from scipy.integrate import quad
 
-    def f(x):
+    def f(x: float) -> float:
         return float(kfbm_covariance(hurst, sw, np.float64(x), np.float64(x)))
 
     val, _err = quad(f, 0.0, length, epsabs=0.0, epsrel=1e-10, limit=200)
     return val / length
 
 
-def _pink(ctx: Context, res: dict, ax) -> None:
+def _pink(ctx: Context, res: dict[str, Any], ax: Axes) -> None:
     lav = need("line_average_variance")
     sod = need("sample_optical_depth")
     n_rays = 2000 if ctx.quick else 10000
@@ -120,7 +125,7 @@ def _pink(ctx: Context, res: dict, ax) -> None:
     ax.legend(fontsize=7)
 
 
-def _kfbm(ctx: Context, res: dict, ax) -> None:
+def _kfbm(ctx: Context, res: dict[str, Any], ax: Axes) -> None:
     lav = need("line_average_variance")
     skf = need("sample_kfbm_1d")
     n_samples = 1000 if ctx.quick else 8000
@@ -132,15 +137,16 @@ def _kfbm(ctx: Context, res: dict, ax) -> None:
         # t = 1 is an arbitrary segment length.
         closed = np.array([float(lav(hurst, SW, 1.0, length=L)) for L in l_dense])
         closed_mc = np.array([float(lav(hurst, SW, 1.0, length=L)) for L in lengths])
-        est, se = [], []
+        est_list: list[float] = []
+        se_list: list[float] = []
         for i, L in enumerate(lengths):
             m = _paths(skf(n_samples, n_steps, float(L), hurst, SW, ctx.seed + 300 + 10 * i + int(10 * hurst), progress=False))
             m2 = m**2
             # Trapezoid rule (written out: np.trapezoid needs numpy >= 2).
             y = 0.5 * (m2[:, :-1] + m2[:, 1:]).sum(axis=1) * (L / n_steps) / L
-            est.append(y.mean())
-            se.append(y.std(ddof=1) / np.sqrt(n_samples))
-        est, se = np.array(est), np.array(se)
+            est_list.append(y.mean())
+            se_list.append(y.std(ddof=1) / np.sqrt(n_samples))
+        est, se = np.array(est_list), np.array(se_list)
         q = np.array([quad_kfbm(hurst, SW, L) for L in lengths])
         k = int(np.ceil(hurst))
         ax.loglog(l_dense, closed, "-", color=color, lw=1.2, label=f"{k}-fBm H = {hurst}: S_kf L^(2H)")
@@ -174,7 +180,7 @@ def _kfbm(ctx: Context, res: dict, ax) -> None:
 
 
 def run(ctx: Context) -> GroupResult:
-    res: dict = {"pink": {}, "kfbm": {}}
+    res: dict[str, Any] = {"pink": {}, "kfbm": {}}
     fig = new_figure(12, 5)
     ax1, ax2 = fig.subplots(1, 2)
     _pink(ctx, res["pink"], ax1)
