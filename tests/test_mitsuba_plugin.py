@@ -206,6 +206,66 @@ def test_heterogeneous_media_are_refused() -> None:
 
 
 # --------------------------------------------------------------------------
+# The per-sample Dr.Jit math against fgf's float64 models
+
+MODELS = {
+    "pink": lambda: fgf.Fgf(4.0, hurst=-0.1, sw=4.0),
+    "pink-0.4": lambda: fgf.Fgf(1.0, hurst=-0.4, sw=10.0),
+    "white": lambda: fgf.Fgf(4.0, hurst=-0.5, sw=4.0),
+    "2fbm": lambda: fgf.Fgf(4.0, hurst=1.2, sw=34.0, length=1.0),
+    "davis": lambda: fgf.Davis(4.0, alpha=0.5),
+    "dw": lambda: fgf.DavisWeinstein(4.0, h=0.9, c=0.78),
+    "exponential": lambda: fgf.Exponential(3.0),
+}
+
+
+@pytest.mark.parametrize("var", ["scalar_rgb", "llvm_ad_rgb"])
+@pytest.mark.parametrize("name", list(MODELS))
+def test_drjit_math_matches_fgf_models(name: str, var: str) -> None:
+    """Tr, T_sm, T_ms, T_mm and both flight samplers (closed forms and the
+    tabulated inverse) in float32 Dr.Jit against fgf's float64 models."""
+    from fgf.mitsuba import _drmath as dm
+    from fgf.mitsuba import _params, _plugins
+
+    variant(var)
+    jit = var.startswith("llvm")
+    m = MODELS[name]()
+    data = _params.medium_data([m] * 3, (1.0, 1.0, 1.0), True)
+    tables = _plugins.SceneTables([data], {}, jit)
+    g = data.gamma[0]
+    n = 200 if jit else 12
+    t = np.geomspace(1e-4, 30.0, n) / g.sigma
+    u = np.linspace(0.0, 1.0, n, endpoint=False)[1:]
+    u = np.concatenate([[1e-7, 1e-4], u, [1 - 2**-23]]).astype(np.float32).astype(np.float64)
+
+    def run(f: Any, x: np.ndarray) -> np.ndarray:
+        if jit:
+            return np.array(f(mi.Float(x)), dtype=np.float64)
+        return np.array([float(f(float(v))) for v in x])
+
+    def ev(fn: Any, *extra: float) -> Any:
+        return lambda x: fn(g.sigma, g.k, g.e, *extra, x)
+
+    for what, mine, ref in [
+        ("tr", ev(dm.tr), m.tr),
+        ("pdf", ev(dm.surface_medium), m.pdf),
+        ("T_ms", ev(dm.medium_surface), m.medium_surface),
+        ("T_mm", ev(dm.medium_medium, g.sigma_bar), m.medium_medium),
+    ]:
+        got, want = run(mine, t), np.asarray(ref(t))
+        assert np.allclose(got, want, rtol=3e-5, atol=1e-30), (what, np.max(np.abs(got / want - 1)))
+    for medium, ref in [(False, m.sample_surface), (True, m.sample_medium)]:
+        p = tables.params(1 if not jit else mi.UInt32(1), 0 if not jit else mi.UInt32(0), True)
+
+        def flight(x: Any, medium: bool = medium, p: Any = p) -> Any:
+            slot = mi.UInt32(1)
+            return tables.sample_flight(p, slot, x, mi.Bool(medium), True)
+
+        got, want = run(flight, u), np.asarray(ref(u))
+        assert np.allclose(got, want, rtol=2e-5), (medium, np.max(np.abs(got / want - 1)))
+
+
+# --------------------------------------------------------------------------
 # Exponential media: fgf_volpath against Mitsuba's volpath
 
 HOMOGENEOUS_RGB = (
@@ -223,8 +283,8 @@ def test_exponential_matches_volpath_llvm() -> None:
 
 def test_exponential_matches_volpath_scalar() -> None:
     med = '<medium type="homogeneous" name="interior"><float name="sigma_t" value="4"/><float name="albedo" value="0.8"/></medium>'
-    a = render_mi(cube_scene("fgf_volpath", med, 8), "scalar_rgb", 16, 6)
-    b = render_mi(cube_scene("volpath", med, 8), "scalar_rgb", 16, 6)
+    a = render_mi(cube_scene("fgf_volpath", med, 8), "scalar_rgb", 8, 6)
+    b = render_mi(cube_scene("volpath", med, 8), "scalar_rgb", 8, 6)
     assert_same_as_mitsuba(a, b, "homogeneous grey, scalar_rgb", 4)
 
 
@@ -244,13 +304,13 @@ def test_white_noise_with_roughplastic_matches_volpath() -> None:
         white = fgf_medium(-0.5, sw, kernel, sigma=str(sigma), tag="fgf").replace('name="interior"', 'id="m" name="interior"')
         ext_w = '<ref id="m" name="exterior"/>'
         a = render_mi(
-            cube_scene("fgf_volpath", white, 16, ROUGH_SPHERE.format(medium_ext=ext_w)), "llvm_ad_rgb", 64, 8
+            cube_scene("fgf_volpath", white, 16, ROUGH_SPHERE.format(medium_ext=ext_w)), "llvm_ad_rgb", 64, 6
         )
         homo = (
             f'<medium type="homogeneous" id="m" name="interior"><float name="sigma_t" value="{sigma_bar}"/>'
             '<rgb name="albedo" value="0.8"/></medium>'
         )
-        b = render_mi(cube_scene("volpath", homo, 16, ROUGH_SPHERE.format(medium_ext=ext_w)), "llvm_ad_rgb", 64, 8)
+        b = render_mi(cube_scene("volpath", homo, 16, ROUGH_SPHERE.format(medium_ext=ext_w)), "llvm_ad_rgb", 64, 6)
         assert_same_as_mitsuba(a, b, f"white noise + roughplastic, {kernel}", 4)
 
 
@@ -352,6 +412,17 @@ def test_furnace_is_one(var: str, kernel: str) -> None:
     imgs = render_mi(furnace(med, "", res), var, spp, k)
     assert np.isfinite(imgs).all()
     assert_mean_is(imgs, 1.0, f"furnace {kernel} {var}", 4)
+
+
+@pytest.mark.parametrize("kernel", ["energy_conserving", "reciprocal"])
+def test_furnace_camera_inside_the_medium(kernel: str) -> None:
+    """The sensor's medium (a segment from the camera starts on a surface)."""
+    med = fgf_medium(-0.2, 4.0, kernel, sigma="1, 2, 3", albedo="1").replace('name="interior"', 'id="m" name="interior"')
+    xml = furnace(med, "", 16).replace(
+        '<lookat origin="0,0,4"', '<lookat origin="0,0,0.2"').replace("</film></sensor>", '</film><ref id="m"/></sensor>')
+    imgs = render_mi(xml, "llvm_ad_rgb", 32, 6)
+    assert np.isfinite(imgs).all()
+    assert_mean_is(imgs, 1.0, f"furnace from inside, {kernel}", 4)
 
 
 def test_furnace_with_roughplastic_is_bounded() -> None:

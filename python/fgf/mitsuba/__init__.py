@@ -43,8 +43,9 @@ def register(variant: Optional[str] = None) -> bool:
     Returns
     -------
     bool
-        False when no variant is set yet (nothing registered), True otherwise.
-        Registering twice for a variant is harmless.
+        False when no variant is set yet or the variant is not an RGB one
+        (``scalar_rgb``, ``llvm_ad_rgb``, ``cuda_ad_rgb``): nothing is
+        registered. True otherwise; registering twice is harmless.
     """
     import mitsuba as mi
 
@@ -55,6 +56,9 @@ def register(variant: Optional[str] = None) -> bool:
         raise ValueError(f"register({variant!r}): the current Mitsuba variant is {current!r}")
     if current in _registered:
         return True
+    if not current.endswith("_rgb"):
+        # The integrator works in RGB (three channels, hero-channel MIS).
+        return False
     from ._plugins import make_plugins
 
     fgf_medium, nonexp_medium, integrator = make_plugins()

@@ -204,7 +204,7 @@ class SceneTables:
         return dr.select(y > 0, t, 0.0)
 
 
-def _medium_props(props: Any) -> dict[str, Any]:
+def _medium_props(plugin: str, props: Any) -> dict[str, Any]:
     """The plain parameters of a medium's ``Properties`` (nested objects
     such as the phase function are taken by Mitsuba's base class)."""
     out: dict[str, Any] = {}
@@ -214,7 +214,13 @@ def _medium_props(props: Any) -> dict[str, Any]:
             continue
         ty = props.type(name)
         if ty == T.Object:
-            continue
+            obj = props[name]
+            if isinstance(obj, mi.PhaseFunction):
+                continue
+            raise MediumParameterError(
+                f"{plugin} medium: nested {type(obj).__name__} '{name}' is not supported by fgf.mitsuba "
+                "(only a phase function; a 'density' grid needs fgf's own renderer)"
+            )
         v = props[name]
         if ty == T.Color:
             v = (float(v[0]), float(v[1]), float(v[2]))
@@ -238,7 +244,7 @@ def make_plugins() -> tuple[Callable[[Any], Any], Callable[[Any], Any], Callable
 
         def __init__(self, props: Any, plugin: str) -> None:
             mi.Medium.__init__(self, props)
-            self.spec: MediumSpec = parse_spec(plugin, _medium_props(props))
+            self.spec: MediumSpec = parse_spec(plugin, _medium_props(plugin, props))
             sig = self.spec.sigma_t
             self.m_is_homogeneous = True
             self.m_has_spectral_extinction = not (sig[0] == sig[1] == sig[2])
