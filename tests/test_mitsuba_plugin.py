@@ -281,6 +281,18 @@ def test_exponential_matches_volpath_llvm() -> None:
     assert_same_as_mitsuba(a, b, "homogeneous rgb, llvm_ad_rgb", 4)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("max_depth", [1, 2, 3, 64])
+def test_exponential_matches_volpath_llvm_slow(max_depth: int) -> None:
+    """max_depth semantics (1: emitters seen directly, 2: single scattering)
+    and a larger image."""
+    inner = ROUGH_SPHERE.format(medium_ext='<ref id="h" name="exterior"/>')
+    med = HOMOGENEOUS_RGB.replace('name="interior"', 'id="h" name="interior"')
+    a = render_mi(cube_scene("fgf_volpath", med, 32, inner, max_depth), "llvm_ad_rgb", 128, 16)
+    b = render_mi(cube_scene("volpath", med, 32, inner, max_depth), "llvm_ad_rgb", 128, 16)
+    assert_same_as_mitsuba(a, b, f"homogeneous rgb + roughplastic, max_depth {max_depth}", 8)
+
+
 def test_exponential_matches_volpath_scalar() -> None:
     med = '<medium type="homogeneous" name="interior"><float name="sigma_t" value="4"/><float name="albedo" value="0.8"/></medium>'
     a = render_mi(cube_scene("fgf_volpath", med, 8), "scalar_rgb", 8, 6)

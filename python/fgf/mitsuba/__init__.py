@@ -18,7 +18,8 @@ through Mitsuba's variant callbacks, for every variant set afterwards;
 
 from __future__ import annotations
 
-from typing import Optional
+import importlib
+from typing import Any, Optional
 
 from ._params import MediumParameterError
 
@@ -47,8 +48,7 @@ def register(variant: Optional[str] = None) -> bool:
         (``scalar_rgb``, ``llvm_ad_rgb``, ``cuda_ad_rgb``): nothing is
         registered. True otherwise; registering twice is harmless.
     """
-    import mitsuba as mi
-
+    mi = _mitsuba()
     current = mi.variant()
     if current is None:
         return False
@@ -79,9 +79,13 @@ def _on_variant_change(old: Optional[str], new: Optional[str]) -> None:
         register()
 
 
-def _install() -> None:
-    import mitsuba as mi
+def _mitsuba() -> Any:
+    # Imported as `Any`: Mitsuba's stubs describe one variant only.
+    return importlib.import_module("mitsuba")
 
+
+def _install() -> None:
+    mi = _mitsuba()
     mi.detail.add_variant_callback(_on_variant_change)
     register()
 

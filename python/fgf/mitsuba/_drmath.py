@@ -22,11 +22,15 @@ the tabulated exact inverse of ``_params.flight_table`` (cubic Hermite in
 
 from __future__ import annotations
 
+import importlib
 from typing import Any
 
-import drjit as dr
-
 from ._params import LN_Y_MAX, LN_Y_MIN
+
+# Dr.Jit's types depend on the Mitsuba variant chosen at run time; its stubs
+# describe none of them in particular, so it is imported as `Any` (this also
+# keeps mypy from analysing the large Dr.Jit/Mitsuba stubs).
+dr: Any = importlib.import_module("drjit")
 
 # Dr.Jit values of the current variant: typed loosely on purpose (the
 # concrete classes depend on the variant chosen at run time).

@@ -74,9 +74,9 @@ def _err(plugin: str, name: str, value: Any, valid: str) -> MediumParameterError
 def _rgb(plugin: str, name: str, v: Any) -> tuple[float, float, float]:
     try:
         if isinstance(v, (int, float)):
-            c = (float(v),) * 3
+            c = [float(v)] * 3
         else:
-            c = tuple(float(v[i]) for i in range(3))
+            c = [float(v[i]) for i in range(3)]
     except (TypeError, IndexError, ValueError):
         raise _err(plugin, name, v, "a float or an rgb value") from None
     return (c[0], c[1], c[2])
@@ -205,6 +205,7 @@ def gamma_of(model: _tr.TransmittanceModel) -> Gamma:
     """``(σ, k, e, σ̄)`` of a model, checked against the model's own ``tr``
     at a few distances (relative 1e-9 on ``-ln Tr``)."""
     s = model.sigma_t
+    m: Any = model  # the models' methods take scalars or arrays
     if isinstance(model, _tr.Exponential):
         k, e = 0.0, 0.0
     elif isinstance(model, _tr.Davis):
@@ -215,12 +216,12 @@ def gamma_of(model: _tr.TransmittanceModel) -> Gamma:
     elif isinstance(model, _tr.Fgf):
         e = {"white": 0.0, "pink": 1.0 + 2.0 * model.hurst}.get(model.regime, 1.0)
         # x(t) = t var[σ̄_t] / σ_m = k t^e, so k = var[σ̄_1] / σ_m.
-        k = float(model.variance(1.0)) / s
+        k = float(m.variance(1.0)) / s
     else:  # pragma: no cover - the four models are closed
         raise TypeError(f"unknown transmittance model {model!r}")
     g = Gamma(s, k, e, float(model.sigma_bar))
     t = np.array([1e-3, 0.1, 1.0, 10.0]) / s
-    want = -np.log(np.asarray(model.tr(t), dtype=np.float64))
+    want = -np.log(np.asarray(m.tr(t), dtype=np.float64))
     got = -ln_tr_np(g, t)
     ok = np.isclose(got, want, rtol=1e-9, atol=1e-300) | (want > 700)
     if not ok.all():  # pragma: no cover - a mismatch is a bug, not bad input
@@ -252,14 +253,15 @@ class FlightTable:
 
 def _exact(model: _tr.TransmittanceModel, medium: bool, ln_y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """The exact sampler's ``(ln t, d ln t / d ln y)`` at ``ln y``."""
+    m: Any = model  # the models' methods take scalars or arrays
     y = np.exp(ln_y)
     u = -np.expm1(-y)
     if medium:
-        t = np.asarray(model.sample_medium(u), dtype=np.float64)
-        hazard = np.asarray(model.medium_medium(t)) / np.asarray(model.medium_surface(t))
+        t = np.asarray(m.sample_medium(u), dtype=np.float64)
+        hazard = np.asarray(m.medium_medium(t)) / np.asarray(m.medium_surface(t))
     else:
-        t = np.asarray(model.sample_surface(u), dtype=np.float64)
-        hazard = np.asarray(model.pdf(t)) / np.asarray(model.tr(t))
+        t = np.asarray(m.sample_surface(u), dtype=np.float64)
+        hazard = np.asarray(m.pdf(t)) / np.asarray(m.tr(t))
     with np.errstate(all="ignore"):
         return np.log(t), y / (t * hazard)
 

@@ -34,11 +34,10 @@ Mitsuba's own ``homogeneous`` media are handled as the exponential model
 
 from __future__ import annotations
 
+import importlib
 import math
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Optional, TypeVar
 
-import drjit as dr
-import mitsuba as mi
 import numpy as np
 
 from . import _drmath as dm
@@ -53,6 +52,17 @@ from ._params import (
     medium_data,
     parse_spec,
 )
+
+# Dr.Jit and Mitsuba as `Any`: their classes depend on the variant chosen at
+# run time (``mi.Float`` is a Python float in scalar_rgb, an LLVM array in
+# llvm_ad_rgb), which no static type describes.
+dr: Any = importlib.import_module("drjit")
+mi: Any = importlib.import_module("mitsuba")
+
+_F = TypeVar("_F", bound=Callable[..., Any])
+#: ``dr.syntax``, typed: it rewrites a function's ``if``/``while`` on Dr.Jit
+#: masks into symbolic branches and loops, keeping its signature.
+syntax: Callable[[_F], _F] = dr.syntax
 
 #: Largest ``max_depth`` (``-1`` in the XML means unbounded, as in Mitsuba).
 UNBOUNDED = 2**32 - 1
@@ -239,7 +249,7 @@ def make_plugins() -> tuple[Callable[[Any], Any], Callable[[Any], Any], Callable
     Dr.Jit and must not use closure variables, only globals and ``self``.)"""
     jit = bool(dr.is_jit_v(mi.Float))
 
-    class FgfMedium(mi.Medium):  # type: ignore[misc, name-defined]
+    class FgfMedium(mi.Medium):  # type: ignore[misc]
         """A non-exponential medium (parameters only; see the module docs)."""
 
         def __init__(self, props: Any, plugin: str) -> None:
@@ -265,7 +275,7 @@ def make_plugins() -> tuple[Callable[[Any], Any], Callable[[Any], Any], Callable
         def to_string(self) -> str:
             return f"FgfMedium[{self.spec}]"
 
-    class FgfVolpath(mi.SamplingIntegrator):  # type: ignore[misc, name-defined]
+    class FgfVolpath(mi.SamplingIntegrator):  # type: ignore[misc]
         """The ``fgf_volpath`` integrator (see the module docs)."""
 
         def __init__(self, props: Any) -> None:
@@ -376,7 +386,7 @@ def make_plugins() -> tuple[Callable[[Any], Any], Callable[[Any], Any], Callable
             it.wavelengths = wavelengths
             return it
 
-        @dr.syntax
+        @syntax
         def _shadow(self, scene: Any, st: SceneTables, ray: Any, target: Any, slot: Any,
                     from_medium: Any, active: Any) -> Any:
             """Transmittance of a shadow ray to the point ``target`` through
@@ -405,12 +415,13 @@ def make_plugins() -> tuple[Callable[[Any], Any], Callable[[Any], Any], Callable
                 active &= hit & null & dr.any(trn != 0.0)
             return trn
 
-        @dr.syntax
+        @syntax
         def sample(self, scene: Any, sampler: Any, ray_: Any, medium: Any = None,
                    active_: Any = True) -> Any:
             st = self.prepare(scene)
             ray = mi.Ray3f(ray_)
-            active = mi.Bool(active_)
+            # max_depth = 0: nothing, not even emitters seen directly.
+            active = mi.Bool(active_) & (self.max_depth > 0)
             L = mi.Spectrum(0.0)
             thr = mi.Spectrum(1.0)
             r_u = mi.Spectrum(1.0)
