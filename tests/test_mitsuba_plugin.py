@@ -365,6 +365,33 @@ def test_matches_fgf_renderer_llvm(case: str, tmp_path: Path) -> None:
     assert_same_as_fgf(m, img, var, f"{case}, llvm_ad_rgb", 4)
 
 
+def test_two_media_match_fgf_renderer_llvm(tmp_path: Path) -> None:
+    """Nested media: a homogeneous sphere inside the pink cube (slots switch
+    at each boundary; the pink segments restart on each surface)."""
+    med = fgf_medium(-0.1, 4.0, "reciprocal").replace('name="interior"', 'id="pink" name="interior"')
+    inner = (
+        '<shape type="sphere"><point name="center" value="0, 0.75, 0"/><float name="radius" value="0.3"/>'
+        '<bsdf type="null"/><medium type="homogeneous" name="interior"><float name="sigma_t" value="8"/>'
+        '<rgb name="albedo" value="0.5, 0.9, 0.7"/></medium><ref id="pink" name="exterior"/></shape>'
+    )
+    img, var = render_fgf(cube_scene("volpath", med, 16, inner), tmp_path, 1024)
+    m = render_mi(cube_scene("fgf_volpath", med, 16, inner), "llvm_ad_rgb", 64, 12)
+    assert_same_as_fgf(m, img, var, "pink cube around a homogeneous sphere", 4)
+
+
+def test_integrator_kernel_overrides_the_media() -> None:
+    """``kernel`` on fgf_volpath: the same image as the media declaring it."""
+    variant("llvm_ad_rgb")
+    ec = cube_scene("fgf_volpath", fgf_medium(-0.1, 4.0, "energy_conserving"), 8)
+    rec = cube_scene("fgf_volpath", fgf_medium(-0.1, 4.0, "reciprocal"), 8)
+    forced = ec.replace('<integrator type="fgf_volpath">', '<integrator type="fgf_volpath"><string name="kernel" value="reciprocal"/>')
+    a = np.array(mi.render(mi.load_string(forced), spp=16, seed=1))
+    b = np.array(mi.render(mi.load_string(rec), spp=16, seed=1))
+    c = np.array(mi.render(mi.load_string(ec), spp=16, seed=1))
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
 def test_matches_fgf_renderer_scalar(tmp_path: Path) -> None:
     med = fgf_medium(-0.1, 4.0, "reciprocal", sigma="2, 4, 6")
     img, var = render_fgf(cube_scene("volpath", med, 8), tmp_path, 2048)
