@@ -12,7 +12,7 @@ with the energy-conserving or the reciprocal kernel::
     img = mi.render(scene, spp=64)
 
 The plugins are registered for the variant that is current at import and,
-through Mitsuba's variant callbacks, for every variant set afterwards;
+through Mitsuba's variant callbacks, for every RGB variant set afterwards;
 :func:`register` does it explicitly.
 """
 
@@ -81,7 +81,10 @@ def _on_variant_change(old: Optional[str], new: Optional[str]) -> None:
 
 def _mitsuba() -> Any:
     # Imported as `Any`: Mitsuba's stubs describe one variant only.
-    return importlib.import_module("mitsuba")
+    try:
+        return importlib.import_module("mitsuba")
+    except ImportError as e:
+        raise ImportError(f"fgf.mitsuba needs Mitsuba 3 (pip install mitsuba==3.9.1): {e}") from e
 
 
 def _install() -> None:
