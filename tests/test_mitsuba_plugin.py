@@ -341,12 +341,41 @@ def test_white_noise_with_roughplastic_matches_volpath() -> None:
 # --------------------------------------------------------------------------
 # Non-exponential media: fgf_volpath against fgf's renderer
 
+REPO = Path(__file__).resolve().parents[1]
+
+
+def reference_scene(name: str, kernel: str, res: int, spp: int, k: int, max_depth: int, block: int) -> None:
+    """A repository reference scene, loaded by Mitsuba as it is (its
+    integrator is ``volpath``) and rendered with ``fgf_volpath``, against fgf."""
+    path = REPO / "scenes" / name
+    defines = {"res": str(res), "kernel": kernel, "max_depth": str(max_depth)}
+    img, var = fgf.render(path, spp=16 * spp, seed=7, defines=defines, progress=False, return_variance=True)
+    variant("llvm_ad_rgb")
+    scene = mi.load_file(str(path), **defines)
+    integ = mi.load_dict({"type": "fgf_volpath", "max_depth": max_depth})
+    m = np.stack([np.array(mi.render(scene, integrator=integ, spp=spp, seed=i))[..., :3] for i in range(k)])
+    img64, var64 = np.asarray(img, np.float64), np.asarray(var, np.float64)
+    assert_same_as_fgf(m.astype(np.float64), img64, var64, f"{name} {kernel} {res}x{res}", block)
+
+
+@pytest.mark.parametrize("kernel", ["energy_conserving", "reciprocal"])
+@pytest.mark.parametrize("name", ["fgf-cube-pink.xml", "fgf-cube-2fbm.xml"])
+def test_reference_scenes_match_fgf_renderer_llvm(name: str, kernel: str) -> None:
+    reference_scene(name, kernel, 16, 64, 12, 64, 4)
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("kernel", ["energy_conserving", "reciprocal"])
+@pytest.mark.parametrize("name", ["fgf-cube-pink.xml", "fgf-cube-2fbm.xml"])
+def test_reference_scenes_match_fgf_renderer_llvm_slow(name: str, kernel: str) -> None:
+    reference_scene(name, kernel, 32, 256, 16, 64, 8)
+
+
 FGF_CASES = {
-    "pink-ec": fgf_medium(-0.1, 4.0, "energy_conserving"),
-    "pink-reciprocal": fgf_medium(-0.1, 4.0, "reciprocal"),
-    "2fbm-ec": fgf_medium(1.2, 34.0, "energy_conserving", length="1"),
     # No 'length': the default (the cube's diagonal) must agree too.
     "2fbm-reciprocal": fgf_medium(1.2, 34.0, "reciprocal"),
+    "pink-ec-hg": fgf_medium(-0.3, 10.0, "energy_conserving").replace(
+        "</medium>", '<phase type="hg"><float name="g" value="-0.3"/></phase></medium>'),
     "pink-rgb-reciprocal": fgf_medium(-0.2, 4.0, "reciprocal", sigma="2, 4, 8", albedo="0.9, 0.8, 0.7"),
     "dw-reciprocal": (
         '<medium type="nonexponential" name="interior"><float name="sigma_t" value="4"/>'
@@ -409,7 +438,7 @@ def test_matches_fgf_renderer_llvm_slow(case: str, tmp_path: Path) -> None:
 
 
 @pytest.mark.slow
-@pytest.mark.parametrize("case", ["pink-ec", "2fbm-reciprocal", "dw-reciprocal"])
+@pytest.mark.parametrize("case", ["pink-rgb-reciprocal", "2fbm-reciprocal", "dw-reciprocal"])
 def test_matches_fgf_renderer_scalar_slow(case: str, tmp_path: Path) -> None:
     med = FGF_CASES[case]
     img, var = render_fgf(cube_scene("volpath", med, 16), tmp_path, 4096)
