@@ -549,3 +549,15 @@ def test_docs_xml_snippets_render() -> None:
     for xml in (scene, scene.replace(medium.group(0), xmls[1])):
         img = np.array(mi.render(mi.load_string(xml), spp=8))
         assert np.isfinite(img).all() and img.mean() > 0.05
+
+
+def test_hide_emitters_and_max_depth_zero() -> None:
+    """Only the environment is in view: hide_emitters or max_depth 0 give 0."""
+    variant("llvm_ad_rgb")
+    base = furnace("", "", 4)
+    seen = np.array(mi.render(mi.load_string(base), spp=4))
+    assert np.allclose(seen, 1.0)
+    hidden = base.replace('<integrator type="fgf_volpath">', '<integrator type="fgf_volpath"><boolean name="hide_emitters" value="true"/>')
+    assert (np.array(mi.render(mi.load_string(hidden), spp=4)) == 0).all()
+    zero = base.replace('<integer name="max_depth" value="-1"/>', '<integer name="max_depth" value="0"/>')
+    assert (np.array(mi.render(mi.load_string(zero), spp=4)) == 0).all()
