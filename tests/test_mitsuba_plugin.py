@@ -206,7 +206,7 @@ def test_heterogeneous_media_are_refused() -> None:
         '<float name="value" value="1"/></volume></medium>'
     )
     scene = mi.load_string(cube_scene("fgf_volpath", med, 4))
-    with pytest.raises(Exception, match="not supported"):
+    with pytest.raises(fgf.mitsuba.MediumParameterError, match="HeterogeneousMedium is not supported"):
         mi.render(scene, spp=1)
 
 

@@ -16,6 +16,7 @@ from typing import Any, Optional, Sequence
 
 import numpy as np
 
+from .. import ParameterError
 from .. import transmittance as _tr
 
 KERNELS = ("energy_conserving", "reciprocal")
@@ -35,9 +36,10 @@ TABLE_NODES = (1024, 4096, 16384)
 TABLE_MAX_ERROR = 1e-7
 
 
-class MediumParameterError(ValueError):
-    """An ``fgf``/``nonexponential`` medium parameter is out of range; the
-    message names the parameter and its valid range."""
+class MediumParameterError(ParameterError):
+    """An ``fgf``/``nonexponential`` medium parameter is out of range, or a
+    medium ``fgf_volpath`` does not support; the message names the parameter
+    and its valid range. A :class:`fgf.ParameterError` (so a ``ValueError``)."""
 
 
 @dataclass(frozen=True)
