@@ -12,6 +12,12 @@ fi
 python -m pip install --quiet --disable-pip-version-check --upgrade pip
 if [ "${1:-}" = "--test" ]; then
     python -m pip install --quiet --disable-pip-version-check -r requirements-dev.txt
+    # Mitsuba's llvm_ad_rgb variant (tests/test_mitsuba_plugin.py) needs LLVM 19:
+    # Dr.Jit aborts with Debian 12's default LLVM 15.
+    if [ ! -e /usr/lib/x86_64-linux-gnu/libLLVM.so.19.1 ] && command -v apt-get >/dev/null; then
+        { apt-get update -qq && apt-get install -y -qq libllvm19 >/dev/null; } \
+            || { echo "setup: installing libllvm19 failed (needs root); the llvm_ad_rgb tests will fail" >&2; }
+    fi
 else
     python -m pip install --quiet --disable-pip-version-check "maturin>=1.5,<2" "numpy>=1.24" "scipy>=1.10" "matplotlib>=3.7" "tqdm>=4.60"
 fi
