@@ -17,6 +17,7 @@
 
 pub mod error;
 pub mod progress;
+pub mod rng;
 pub mod stats;
 pub mod transmittance;
 
