@@ -21,5 +21,5 @@ pub mod rng;
 pub mod stats;
 pub mod transmittance;
 
-pub use error::{ParamError, Result};
+pub use error::{Cancelled, ParamError, Result};
 pub use progress::{NoProgress, Progress};

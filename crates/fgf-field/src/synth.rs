@@ -30,7 +30,7 @@
 //! `p = 2`: ~8× the output array).
 
 use crate::noise::{stream, Purpose};
-use fgf_core::{ParamError, Progress};
+use fgf_core::{Cancelled, ParamError, Progress};
 use rand::Rng;
 use rand_distr::StandardNormal;
 use rayon::prelude::*;
@@ -197,8 +197,8 @@ pub enum FieldError {
         available: u64,
     },
     /// The [`Progress`] asked to stop.
-    #[error("cancelled by the user")]
-    Cancelled,
+    #[error(transparent)]
+    Cancelled(#[from] Cancelled),
 }
 
 pub(crate) fn fmt_bytes(b: u64) -> String {
@@ -643,14 +643,6 @@ fn as_complex_mut<T>(row: &mut [T]) -> &mut [Complex<T>] {
     unsafe { std::slice::from_raw_parts_mut(row.as_mut_ptr() as *mut Complex<T>, row.len() / 2) }
 }
 
-fn cancel_check(progress: &dyn Progress) -> Result<(), FieldError> {
-    if progress.cancelled() {
-        Err(FieldError::Cancelled)
-    } else {
-        Ok(())
-    }
-}
-
 /// FFT along y of one contiguous z-slab (`n1` rows of `nxh` complex), in
 /// blocks of `B` columns gathered into `tmp`.
 fn y_fft_slab<T: Real>(
@@ -862,7 +854,7 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                 progress.inc((n1 + nblk) as u64);
             },
         );
-        cancel_check(progress)?;
+        progress.check_cancelled()?;
     } else {
         buf.par_chunks_mut(row_len).enumerate().for_each_init(
             || (r2c.make_input_vec(), r2c.make_scratch_vec()),
@@ -876,7 +868,7 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                 progress.inc(1);
             },
         );
-        cancel_check(progress)?;
+        progress.check_cancelled()?;
         if n1 > 1 {
             y_pass(
                 SyncPtr(buf.as_mut_ptr() as *mut Complex<T>),
@@ -885,7 +877,7 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
                 &fy,
                 progress,
             );
-            cancel_check(progress)?;
+            progress.check_cancelled()?;
         }
     }
     let spec = SyncPtr(buf.as_mut_ptr() as *mut Complex<T>);
@@ -967,7 +959,7 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
             },
         )
         .collect();
-    cancel_check(progress)?;
+    progress.check_cancelled()?;
     // Fixed-order reduction over planes: thread-count independent.
     let poly = plan.anchor.map(|a| {
         let mut d = vec![0.0f64; n_terms];
@@ -990,7 +982,7 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
     let fused = n1 > 1 && fuse_slabs(o0);
     if n1 > 1 && !fused {
         y_pass(spec, plan.pad, o0, &iy, progress);
-        cancel_check(progress)?;
+        progress.check_cancelled()?;
     }
     let finish_row = |c: &mut [Complex<T>],
                       o: &mut [T],
@@ -1069,7 +1061,7 @@ fn run<T: Real>(plan: &Plan, seed: u64, progress: &dyn Progress) -> Result<Vec<T
             },
         );
     }
-    cancel_check(progress)?;
+    progress.check_cancelled()?;
     // Front to back, each row moves to a lower or equal offset
     // ((z·o1 + y)·o2 <= (z·n1 + y)·row_len), so nothing unread is overwritten.
     for z in 0..o0 {
@@ -1327,6 +1319,30 @@ mod tests {
         }
         let msg = synthesize(&p, &NoProgress).unwrap_err().to_string();
         assert!(msg.contains("MemAvailable") && msg.contains("GiB"), "{msg}");
+    }
+
+    /// A cancelled job returns the shared `Cancelled` error, and an invalid
+    /// parameter keeps its structured `ParamError`.
+    #[test]
+    fn cancellation_and_parameter_errors_keep_their_types() {
+        struct Stop;
+        impl Progress for Stop {
+            fn inc(&self, _n: u64) {}
+            fn cancelled(&self) -> bool {
+                true
+            }
+        }
+        let p = SynthParams::new(&[16, 16], -0.3);
+        match synthesize(&p, &Stop) {
+            Err(e @ FieldError::Cancelled(Cancelled)) => assert_eq!(e.to_string(), "interrupted"),
+            other => panic!("expected Cancelled, got {other:?}"),
+        }
+        let mut p = SynthParams::new(&[16, 16], -0.3);
+        p.sw = -1.0;
+        match synthesize(&p, &NoProgress) {
+            Err(FieldError::Param(e)) => assert_eq!(e.name, "sw"),
+            other => panic!("expected Param, got {other:?}"),
+        }
     }
 
     #[test]
