@@ -20,8 +20,8 @@
 //! paths per FFT) draws from its own counter-based stream `(seed, index)`:
 //! results are identical for any thread count.
 
+use crate::error::{check_memory, FieldError};
 use crate::noise::{stream, Purpose};
-use crate::synth::{check_memory, FieldError};
 use fgf_core::stats::{binom, c_const, s_p, Regime};
 use fgf_core::{ParamError, Progress};
 use rand::Rng;
