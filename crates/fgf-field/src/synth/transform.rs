@@ -24,10 +24,37 @@ use std::sync::Arc;
 struct SyncPtr<T>(*mut T);
 unsafe impl<T> Send for SyncPtr<T> {}
 unsafe impl<T> Sync for SyncPtr<T> {}
-impl<T> SyncPtr<T> {
+impl<T: Copy> SyncPtr<T> {
+    /// Copy a block of `bw` columns of `n` strided rows, elements
+    /// `first + r·stride + j` (`r < n`, `j < bw`), into `tmp[j·n + r]`: each
+    /// column becomes a contiguous line for the FFT.
+    ///
+    /// # Safety
+    /// The elements lie inside the buffer and belong to the calling job
+    /// (no other thread touches them meanwhile).
     #[inline]
-    fn get(self) -> *mut T {
-        self.0
+    unsafe fn gather(self, first: usize, stride: usize, n: usize, bw: usize, tmp: &mut [T]) {
+        for r in 0..n {
+            let src = std::slice::from_raw_parts(self.0.add(first + r * stride), bw);
+            for (j, v) in src.iter().enumerate() {
+                tmp[j * n + r] = *v;
+            }
+        }
+    }
+
+    /// The inverse of [`SyncPtr::gather`]: `tmp[j·n + r]` back to element
+    /// `first + r·stride + j`.
+    ///
+    /// # Safety
+    /// As for [`SyncPtr::gather`].
+    #[inline]
+    unsafe fn scatter(self, first: usize, stride: usize, n: usize, bw: usize, tmp: &[T]) {
+        for r in 0..n {
+            let dst = std::slice::from_raw_parts_mut(self.0.add(first + r * stride), bw);
+            for (j, v) in dst.iter_mut().enumerate() {
+                *v = tmp[j * n + r];
+            }
+        }
     }
 }
 
@@ -39,8 +66,31 @@ fn as_complex_mut<T>(row: &mut [T]) -> &mut [Complex<T>] {
     unsafe { std::slice::from_raw_parts_mut(row.as_mut_ptr() as *mut Complex<T>, row.len() / 2) }
 }
 
+/// FFT along y of the columns `x0..x0+B` (or to the end of the row) of the
+/// z-slab that starts at element `slab_first` (`n1` rows of `nxh` complex),
+/// through `tmp`.
+///
+/// # Safety
+/// As for [`SyncPtr::gather`]: the block belongs to the calling job.
+#[allow(clippy::too_many_arguments)]
+unsafe fn y_fft_block<T: Real>(
+    spec: SyncPtr<Complex<T>>,
+    slab_first: usize,
+    n1: usize,
+    nxh: usize,
+    x0: usize,
+    fft: &Arc<dyn Fft<T>>,
+    tmp: &mut [Complex<T>],
+    scr: &mut [Complex<T>],
+) {
+    let bw = B.min(nxh - x0);
+    spec.gather(slab_first + x0, nxh, n1, bw, tmp);
+    fft.process_with_scratch(&mut tmp[..bw * n1], scr);
+    spec.scatter(slab_first + x0, nxh, n1, bw, tmp);
+}
+
 /// FFT along y of one contiguous z-slab (`n1` rows of `nxh` complex), in
-/// blocks of `B` columns gathered into `tmp`.
+/// blocks of `B` columns.
 fn y_fft_slab<T: Real>(
     slab: &mut [Complex<T>],
     n1: usize,
@@ -49,19 +99,11 @@ fn y_fft_slab<T: Real>(
     tmp: &mut [Complex<T>],
     scr: &mut [Complex<T>],
 ) {
+    assert!(slab.len() >= n1 * nxh);
+    let spec = SyncPtr(slab.as_mut_ptr());
     for x0 in (0..nxh).step_by(B) {
-        let bw = B.min(nxh - x0);
-        for y in 0..n1 {
-            for j in 0..bw {
-                tmp[j * n1 + y] = slab[y * nxh + x0 + j];
-            }
-        }
-        fft.process_with_scratch(&mut tmp[..bw * n1], scr);
-        for y in 0..n1 {
-            for j in 0..bw {
-                slab[y * nxh + x0 + j] = tmp[j * n1 + y];
-            }
-        }
+        // SAFETY: `slab` is borrowed mutably and holds the n1 rows.
+        unsafe { y_fft_block(spec, 0, n1, nxh, x0, fft, tmp, scr) };
     }
 }
 
@@ -94,25 +136,8 @@ fn y_pass<T: Real>(
                 return;
             }
             let (z, x0) = (job / nblk, (job % nblk) * B);
-            let bw = B.min(nxh - x0);
-            let base = spec.get();
-            for y in 0..n1 {
-                // SAFETY: job (z, block) owns elements [z][*][x0..x0+bw].
-                let src =
-                    unsafe { std::slice::from_raw_parts(base.add((z * n1 + y) * nxh + x0), bw) };
-                for (j, v) in src.iter().enumerate() {
-                    tmp[j * n1 + y] = *v;
-                }
-            }
-            fft.process_with_scratch(&mut tmp[..bw * n1], scr);
-            for y in 0..n1 {
-                let dst = unsafe {
-                    std::slice::from_raw_parts_mut(base.add((z * n1 + y) * nxh + x0), bw)
-                };
-                for (j, v) in dst.iter_mut().enumerate() {
-                    *v = tmp[j * n1 + y];
-                }
-            }
+            // SAFETY: job (z, block) owns elements [z][*][x0..x0+B].
+            unsafe { y_fft_block(spec, z * n1 * nxh, n1, nxh, x0, fft, tmp, scr) };
             progress.inc(1);
         },
     );
@@ -216,19 +241,11 @@ pub(super) fn run<T: Real>(
                 if progress.cancelled() {
                     return acc;
                 }
-                let base = spec.get();
                 for blk in 0..nblk {
                     let x0 = blk * B;
                     let bw = B.min(nxh - x0);
-                    for z in 0..n0 {
-                        // SAFETY: job y owns elements [*][y][*].
-                        let src = unsafe {
-                            std::slice::from_raw_parts(base.add((z * n1 + y) * nxh + x0), bw)
-                        };
-                        for (j, v) in src.iter().enumerate() {
-                            tmp[j * n0 + z] = *v;
-                        }
-                    }
+                    // SAFETY: job y owns elements [*][y][*].
+                    unsafe { spec.gather(y * nxh + x0, n1 * nxh, n0, bw, tmp) };
                     if n0 > 1 {
                         fz.process_with_scratch(&mut tmp[..bw * n0], scr);
                     }
@@ -257,14 +274,7 @@ pub(super) fn run<T: Real>(
                     if n0 > 1 {
                         iz.process_with_scratch(&mut tmp[..bw * n0], scr);
                     }
-                    for z in 0..n0 {
-                        let dst = unsafe {
-                            std::slice::from_raw_parts_mut(base.add((z * n1 + y) * nxh + x0), bw)
-                        };
-                        for (j, v) in dst.iter_mut().enumerate() {
-                            *v = tmp[j * n0 + z];
-                        }
-                    }
+                    unsafe { spec.scatter(y * nxh + x0, n1 * nxh, n0, bw, tmp) };
                 }
                 progress.inc(1);
                 acc
