@@ -7,7 +7,7 @@
 //! time divided by 1024 is the cost of one call; the script prints that.
 
 use divan::black_box;
-use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 
 const BATCH: usize = 1024;
 

@@ -1,4 +1,8 @@
-//! The one error type of the physics crates: an invalid parameter.
+//! The two errors every crate of the workspace shares: an invalid parameter
+//! ([`ParamError`]) and a job stopped by the user ([`Cancelled`]). The
+//! other crates' error enums carry them as their `Param` and `Cancelled`
+//! variants (`#[from]`), so a parameter error keeps its fields all the way
+//! to the front ends.
 
 /// A parameter outside its valid range. The message names the parameter,
 /// the value given and the valid range, e.g.
@@ -59,5 +63,12 @@ impl ParamError {
         }
     }
 }
+
+/// A long job (rendering, synthesis, an ensemble) stopped because its
+/// [`Progress`](crate::Progress) asked it to. A job that can hand back a
+/// partial result carries it in its own error variant next to this one.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, thiserror::Error)]
+#[error("interrupted")]
+pub struct Cancelled;
 
 pub type Result<T, E = ParamError> = std::result::Result<T, E>;

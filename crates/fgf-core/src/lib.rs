@@ -17,8 +17,9 @@
 
 pub mod error;
 pub mod progress;
+pub mod rng;
 pub mod stats;
 pub mod transmittance;
 
-pub use error::{ParamError, Result};
+pub use error::{Cancelled, ParamError, Result};
 pub use progress::{NoProgress, Progress};

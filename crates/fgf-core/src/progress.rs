@@ -3,6 +3,8 @@
 //! how to show it (an indicatif bar on stderr for the CLI, a tqdm-compatible
 //! callback in Python) and when to cancel (Ctrl-C).
 
+use crate::error::Cancelled;
+
 /// Implemented by front ends. All methods are called from worker threads and
 /// must be cheap (an atomic add), so call `inc` per tile or per row, not per
 /// sample.
@@ -13,6 +15,15 @@ pub trait Progress: Sync {
     /// units, finish the unit in flight and return what they have.
     fn cancelled(&self) -> bool {
         false
+    }
+    /// `Err(Cancelled)` once [`Progress::cancelled`] is true, for `?` at
+    /// the end of a work stage.
+    fn check_cancelled(&self) -> Result<(), Cancelled> {
+        if self.cancelled() {
+            Err(Cancelled)
+        } else {
+            Ok(())
+        }
     }
 }
 

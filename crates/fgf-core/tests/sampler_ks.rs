@@ -11,7 +11,7 @@
 mod common;
 
 use common::{ks_p_value, ks_statistic};
-use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 

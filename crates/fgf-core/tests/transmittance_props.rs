@@ -8,7 +8,7 @@ mod common;
 
 use common::{integrate_0_inf, tanh_sinh};
 use fgf_core::stats::s_p;
-use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 
 /// A representative set of models: every kind, every regime, mild and
 /// extreme parameters.

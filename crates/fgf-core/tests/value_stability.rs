@@ -4,7 +4,7 @@
 //! (e.g. of the sampler's iteration) legitimately changes the last digits;
 //! then regenerate the file and say so in the commit.
 
-use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 
 const PINNED: &str = include_str!("data/pinned_values.csv");
 

@@ -20,8 +20,8 @@
 //! paths per FFT) draws from its own counter-based stream `(seed, index)`:
 //! results are identical for any thread count.
 
+use crate::error::{check_memory, FieldError};
 use crate::noise::{stream, Purpose};
-use crate::synth::{check_memory, FieldError};
 use fgf_core::stats::{binom, c_const, s_p, Regime};
 use fgf_core::{ParamError, Progress};
 use rand::Rng;
@@ -180,9 +180,7 @@ pub fn sample_optical_depth(
             progress.inc(1);
         },
     );
-    if progress.cancelled() {
-        return Err(FieldError::Cancelled);
-    }
+    progress.check_cancelled()?;
     Ok(Samples1d {
         t: grid(n_steps, t_max),
         n_paths: n_rays,
@@ -278,9 +276,7 @@ pub fn sample_kfbm_1d(
                     0.0
                 };
             });
-        if progress.cancelled() {
-            return Err(FieldError::Cancelled);
-        }
+        progress.check_cancelled()?;
     }
     let mut values = vec![0.0f64; n_samples * cols];
     values.par_chunks_mut(cols).enumerate().for_each_init(
@@ -303,9 +299,7 @@ pub fn sample_kfbm_1d(
             progress.inc(1);
         },
     );
-    if progress.cancelled() {
-        return Err(FieldError::Cancelled);
-    }
+    progress.check_cancelled()?;
     Ok(Samples1d {
         t: grid(n_steps, length),
         n_paths: n_samples,

@@ -48,6 +48,7 @@
 //! assert_eq!(sigma_t.len(), 16 * 16 * 16);
 //! ```
 
+mod error;
 pub mod estimators;
 pub mod exact;
 pub mod export;
@@ -55,9 +56,9 @@ pub mod export;
 mod noise;
 pub mod synth;
 
+pub use error::{mem_available, FieldError};
 pub use exact::{sample_kfbm_1d, sample_optical_depth, Samples1d, MAX_CHOLESKY_STEPS};
 pub use synth::{
-    discrete_spectral_variance, estimate_memory, mem_available, padded_shape,
-    sw_3d_for_ray_statistics, synthesize, work_units, Anchor, Field, FieldData, FieldError,
-    Precision, Real, SynthParams,
+    discrete_spectral_variance, estimate_memory, padded_shape, sw_3d_for_ray_statistics,
+    synthesize, work_units, Anchor, Field, FieldData, Precision, Real, SynthParams,
 };

@@ -17,7 +17,7 @@ fn field_err(e: FieldError) -> PyErr {
     match e {
         FieldError::Param(p) => param_err(p),
         FieldError::OutOfMemory { .. } => FgfError::new_err(e.to_string()),
-        FieldError::Cancelled => PyKeyboardInterrupt::new_err("interrupted"),
+        FieldError::Cancelled(_) => PyKeyboardInterrupt::new_err("interrupted"),
     }
 }
 

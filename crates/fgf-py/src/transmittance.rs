@@ -7,7 +7,7 @@
 
 use crate::errors::{param_err, ParameterError};
 use fgf_core::stats::{self, Regime};
-use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 use fgf_core::ParamError;
 use numpy::{PyArray1, PyReadonlyArray1};
 use pyo3::prelude::*;

@@ -308,7 +308,7 @@ pub fn ensemble(
             params.seed = mix64(base ^ (0x100 + p.medium as u64));
             let field = match synthesize(&params, &cancel_only) {
                 Ok(f) => f,
-                Err(FieldError::Cancelled) => {
+                Err(FieldError::Cancelled(_)) => {
                     cancelled = true;
                     break;
                 }

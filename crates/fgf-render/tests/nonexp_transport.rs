@@ -17,7 +17,7 @@
 //! values of deep furnace paths heavy-tailed (the throughput grows as
 //! 0.95^-n), and the estimated standard errors unreliable.
 
-use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 use fgf_render::geometry::Ray;
 use fgf_render::integrator::World;
 use fgf_render::math::{sample_uniform_sphere, Sampler, Spectrum};

@@ -41,7 +41,7 @@
 //! m.tr(1.0)              # (1 + 1)^-4 = 0.0625
 //! ```
 
-use super::{forward_core, GammaCore};
+use super::gamma::GammaCore;
 use crate::error::{ParamError, Result};
 
 /// Davis power law. See the module docs.
@@ -68,6 +68,4 @@ impl Davis {
     pub fn alpha(&self) -> f64 {
         self.alpha
     }
-
-    forward_core!();
 }

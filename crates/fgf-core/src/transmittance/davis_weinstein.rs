@@ -16,9 +16,10 @@
 //! where it is `σ_eff` (Tungsten's `sigmaBar` returns 1 there, which is not
 //! `T_sm(0)`).
 //!
-//! For `1/2 < h < 1` sampling has no closed form: [`DavisWeinstein::sample_surface`]
-//! and [`DavisWeinstein::sample_medium`] run the safeguarded iteration on
-//! `ln t` described in [`Fgf`](super::Fgf) (tolerances
+//! For `1/2 < h < 1` sampling has no closed form:
+//! [`sample_surface`](super::Transmittance::sample_surface) and
+//! [`sample_medium`](super::Transmittance::sample_medium) run the
+//! safeguarded iteration on `ln t` described in [`Fgf`](super::Fgf) (tolerances
 //! [`SURFACE_TOL`](super::SURFACE_TOL) and [`MEDIUM_TOL`](super::MEDIUM_TOL),
 //! cap [`SAMPLE_MAX_ITER`](super::SAMPLE_MAX_ITER), bisection fallback).
 //!
@@ -48,7 +49,7 @@
 //! m.tr(0.25), m.sample_medium(0.5)
 //! ```
 
-use super::{forward_core, GammaCore};
+use super::gamma::GammaCore;
 use crate::error::{ParamError, Result};
 
 /// Davis–Weinstein model. See the module docs.
@@ -92,6 +93,4 @@ impl DavisWeinstein {
     pub fn c(&self) -> f64 {
         self.c
     }
-
-    forward_core!();
 }

@@ -25,6 +25,7 @@
 //! m.tr([0.0, 0.5]), m.sample_surface(0.5)   # exp(-4t); ln 2 / 4
 //! ```
 
+use super::api::Transmittance;
 use crate::error::{ParamError, Result};
 
 /// `Tr = exp(-σ_t t)`. See the module docs.
@@ -39,10 +40,12 @@ impl Exponential {
         ParamError::check_positive("sigma_t", sigma_t)?;
         Ok(Exponential { sigma_t })
     }
+}
 
+impl Transmittance for Exponential {
     /// `Tr(t) = exp(-σ_t t)`; NaN for `t < 0`.
     #[inline]
-    pub fn tr(&self, t: f64) -> f64 {
+    fn tr(&self, t: f64) -> f64 {
         if !(t >= 0.0) {
             return f64::NAN;
         }
@@ -50,44 +53,36 @@ impl Exponential {
     }
     /// `-dTr/dt = σ_t exp(-σ_t t)`.
     #[inline]
-    pub fn pdf(&self, t: f64) -> f64 {
+    fn pdf(&self, t: f64) -> f64 {
         self.sigma_t * self.tr(t)
-    }
-    #[inline]
-    pub fn surface_surface(&self, t: f64) -> f64 {
-        self.tr(t)
-    }
-    #[inline]
-    pub fn surface_medium(&self, t: f64) -> f64 {
-        self.pdf(t)
     }
     /// `T_ms = T_sm / σ̄ = Tr`.
     #[inline]
-    pub fn medium_surface(&self, t: f64) -> f64 {
+    fn medium_surface(&self, t: f64) -> f64 {
         self.tr(t)
     }
     /// `T_mm = -dT_ms/dt = σ_t Tr`.
     #[inline]
-    pub fn medium_medium(&self, t: f64) -> f64 {
+    fn medium_medium(&self, t: f64) -> f64 {
         self.pdf(t)
     }
     /// `σ̄ = σ_t`.
     #[inline]
-    pub fn sigma_bar(&self) -> f64 {
+    fn sigma_bar(&self) -> f64 {
         self.sigma_t
     }
     #[inline]
-    pub fn sigma_t(&self) -> f64 {
+    fn sigma_t(&self) -> f64 {
         self.sigma_t
     }
     /// `t = -ln(1-u) / σ_t` (`ln_1p` keeps small `u` accurate).
     #[inline]
-    pub fn sample_surface(&self, u: f64) -> f64 {
+    fn sample_surface(&self, u: f64) -> f64 {
         -(-u).ln_1p() / self.sigma_t
     }
-    /// Same as [`Exponential::sample_surface`]: `T_ms = T_ss`.
+    /// Same as `sample_surface`: `T_ms = T_ss`.
     #[inline]
-    pub fn sample_medium(&self, u: f64) -> f64 {
+    fn sample_medium(&self, u: f64) -> f64 {
         self.sample_surface(u)
     }
 }

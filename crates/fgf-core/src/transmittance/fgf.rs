@@ -59,7 +59,9 @@
 //! fgf.Fgf(sigma_t=4.0, hurst=1.2, sw=34.0, length=1.0)        # 2-fBm = Davis
 //! ```
 
-use super::{forward_core, Davis, DavisWeinstein, GammaCore};
+use super::davis::Davis;
+use super::davis_weinstein::DavisWeinstein;
+use super::gamma::GammaCore;
 use crate::error::{ParamError, Result};
 use crate::stats::{check_length, ln_line_average_variance, s_p, Regime, HURST_RANGE};
 
@@ -175,6 +177,4 @@ impl Fgf {
             )),
         }
     }
-
-    forward_core!();
 }

@@ -16,7 +16,7 @@
 //! 24-bit `u` produces, or a model whose solution is not finite there) the
 //! exact sampler answers.
 
-use fgf_core::transmittance::Model;
+use fgf_core::transmittance::{Model, Transmittance};
 
 /// Node counts tried in turn: 1024 (16 kB) is enough for most models; 4096
 /// cuts the interpolation error 256-fold for the harder ones (e.g. pink
