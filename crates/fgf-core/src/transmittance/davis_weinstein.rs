@@ -94,3 +94,19 @@ impl DavisWeinstein {
         self.c
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transmittance::MEDIUM_TOL;
+
+    /// For the benchmark's medium (`h = 0.9`, `c = 0.78`) the medium
+    /// sampler's fitted start is well below `MEDIUM_TOL`, so that one
+    /// evaluation suffices.
+    #[test]
+    fn benchmark_medium_fit_needs_one_evaluation() {
+        let core = DavisWeinstein::new(4.0, 0.9, 0.78).unwrap().core;
+        let err = core.medium_guess_max_err().unwrap();
+        assert!(err < 0.1 * MEDIUM_TOL, "{err:e}");
+    }
+}

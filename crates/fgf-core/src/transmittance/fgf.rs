@@ -178,3 +178,19 @@ impl Fgf {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::transmittance::MEDIUM_TOL;
+
+    /// For the benchmark's pink medium (`H = -0.1`, `S_w = 4`) the medium
+    /// sampler's fitted start is well below `MEDIUM_TOL`, so that one
+    /// evaluation suffices.
+    #[test]
+    fn benchmark_medium_fit_needs_one_evaluation() {
+        let core = Fgf::new(4.0, -0.1, 4.0, None).unwrap().core;
+        let err = core.medium_guess_max_err().unwrap();
+        assert!(err < 0.1 * MEDIUM_TOL, "{err:e}");
+    }
+}

@@ -349,26 +349,33 @@ impl Transmittance for GammaCore {
 }
 
 #[cfg(test)]
+impl GammaCore {
+    /// Largest error (in `ln t`) of the medium sampler's fitted start over
+    /// its whole window, against a tight solve (the construction-time check
+    /// only looks between the nodes); `None` without a fit.
+    pub(crate) fn medium_guess_max_err(&self) -> Option<f64> {
+        use super::start::{MEDIUM_W_HALF, MEDIUM_W_MID};
+        (0..=400)
+            .map(|i| {
+                let w = MEDIUM_W_MID + MEDIUM_W_HALF * (-1.0 + i as f64 / 200.0);
+                let exact = self.solve_medium(w, self.medium_start_asymptotic(w), 1e-12);
+                self.medium_guess.eval(w).map(|s| (s - exact).abs())
+            })
+            .try_fold(0.0, |m, e| e.map(|e| f64::max(m, e)))
+    }
+}
+
+#[cfg(test)]
 mod tests {
     use super::*;
-    use crate::transmittance::start::{MEDIUM_GUESS_MAX_ERR, MEDIUM_W_HALF, MEDIUM_W_MID};
-    use crate::transmittance::{DavisWeinstein, Fgf};
+    use crate::transmittance::start::{MEDIUM_GUESS_MAX_ERR, MEDIUM_W_MID};
 
     /// The medium fit is either dropped or within its bar over the whole
-    /// window (the construction-time check only looks between the nodes),
-    /// and for the benchmark's parameters it is well below `MEDIUM_TOL`, so
-    /// that one evaluation suffices.
+    /// window. (The fgf and Davis–Weinstein tests check that for the
+    /// benchmark's parameters it is well below `MEDIUM_TOL`.)
     #[test]
     fn medium_guess_fits_the_root_or_is_dropped() {
-        let max_err = |core: &GammaCore| -> f64 {
-            (0..=400)
-                .map(|i| {
-                    let w = MEDIUM_W_MID + MEDIUM_W_HALF * (-1.0 + i as f64 / 200.0);
-                    let exact = core.solve_medium(w, core.medium_start_asymptotic(w), 1e-12);
-                    (core.medium_guess.eval(w).unwrap() - exact).abs()
-                })
-                .fold(0.0, f64::max)
-        };
+        let max_err = |core: &GammaCore| core.medium_guess_max_err().unwrap();
         let mut kept = 0;
         for sigma in [0.1, 4.0, 100.0] {
             for k in [1e-4, 0.1, 1.0, 10.0, 1e4] {
@@ -388,14 +395,6 @@ mod tests {
         }
         // Most of the grid keeps its fit (a regression would drop them all).
         assert!(kept >= 40, "{kept} of 75 fits kept");
-        // Benchmark parameters: pink H = -0.1, S_w = 4 and DW h = 0.9, c = 0.78.
-        for m in [
-            Fgf::new(4.0, -0.1, 4.0, None).unwrap().core,
-            DavisWeinstein::new(4.0, 0.9, 0.78).unwrap().core,
-        ] {
-            let err = max_err(&m);
-            assert!(err < 0.1 * MEDIUM_TOL, "{err:e}");
-        }
         // No fit outside the pink regime.
         for (k, e) in [(1.0, 0.0), (1.0, 1.0), (0.0, 0.5)] {
             assert!(GammaCore::new(1.0, k, e).medium_guess == MediumGuess::NONE);
