@@ -23,10 +23,10 @@
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
+use crate::error::RenderError;
 use crate::geometry::{offset_point, shadow_epsilon, Geometry, Hit, Ray};
 use crate::math::{max_comp, mis_power, Frame, Sampler, Spectrum, UNIFORM_SPHERE_PDF};
 use crate::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
-use crate::render::RenderError;
 use crate::scene::desc::{IntegratorKind, SceneDesc};
 use glam::Vec3;
 

@@ -18,8 +18,9 @@ pub mod scene;
 pub mod bsdf;
 pub mod camera;
 pub mod emitter;
-/// Ground truth from explicit realizations of `fgf` media (issue 5).
+/// Ground truth from explicit realizations of `fgf` media.
 pub mod ensemble;
+pub mod error;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
@@ -28,4 +29,6 @@ pub mod medium;
 pub mod phase;
 pub mod render;
 
-pub use render::{render, RenderError, RenderOptions, RenderOutput};
+pub use error::RenderError;
+pub use film::RenderOutput;
+pub use render::{render, RenderOptions};

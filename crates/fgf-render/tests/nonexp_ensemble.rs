@@ -2,9 +2,9 @@
 //! placement, the limit `S_w → 0` (the realizations become the homogeneous
 //! medium), and clear errors for what it cannot realise.
 
-use fgf_render::ensemble::{ensemble, EnsembleOptions};
-use fgf_render::render::{render, RenderError, RenderOptions};
+use fgf_render::ensemble::{ensemble, EnsembleError, EnsembleOptions};
 use fgf_render::scene::desc::SceneDesc;
+use fgf_render::{render, RenderError, RenderOptions};
 
 fn scene(medium: &str, scale: &str) -> SceneDesc {
     let xml = format!(
@@ -119,7 +119,8 @@ fn what_cannot_be_realised_is_a_clear_error() {
     );
     let e = ensemble(&davis, &opts, &fgf_core::NoProgress).unwrap_err();
     assert!(
-        matches!(e, RenderError::Unsupported(_)) && e.to_string().contains("nonexponential"),
+        matches!(e, EnsembleError::Render(RenderError::Unsupported(_)))
+            && e.to_string().contains("nonexponential"),
         "{e}"
     );
     let white = scene(&fgf_medium(-0.5, 1.0), r#"value="0.5""#);
@@ -137,6 +138,6 @@ fn what_cannot_be_realised_is_a_clear_error() {
     };
     assert!(matches!(
         ensemble(&white, &zero, &fgf_core::NoProgress),
-        Err(RenderError::InvalidOption(_))
+        Err(EnsembleError::Render(RenderError::InvalidOption(_)))
     ));
 }

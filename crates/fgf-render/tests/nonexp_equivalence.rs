@@ -8,8 +8,8 @@
 //! converges to the classical `homogeneous` render.
 
 use fgf_core::transmittance::Fgf;
-use fgf_render::render::{render, RenderOptions, RenderOutput};
 use fgf_render::scene::desc::SceneDesc;
+use fgf_render::{render, RenderOptions, RenderOutput};
 
 /// The reference cube scene (`../shared/scenes/cube-homogeneous.xml`),
 /// small: a medium cube over a diffuse ground, lit from the side.

@@ -14,7 +14,7 @@
 use fgf_core::{NoProgress, Progress};
 use fgf_io::vol::VolGrid;
 use fgf_render::scene::desc::*;
-use fgf_render::{render, RenderOptions};
+use fgf_render::{render, RenderError, RenderOptions};
 use glam::{Mat4, Vec3};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -445,8 +445,9 @@ fn cancellation_returns_completed_passes() {
         ..Default::default()
     };
     let p = CancelAfterFirstPass(AtomicU64::new(0));
-    let out = render(&s, &o, &p).unwrap();
-    assert!(out.interrupted);
+    let Err(RenderError::Cancelled { partial: out }) = render(&s, &o, &p) else {
+        panic!("a cancelled render must return RenderError::Cancelled");
+    };
     assert_eq!(out.spp_done, 2);
     let full = render(&s, &RenderOptions { spp: Some(2), ..o }, &NoProgress).unwrap();
     assert_eq!(out.image, full.image);

@@ -13,7 +13,7 @@
 
 pub mod bvh;
 
-use crate::render::RenderError;
+use crate::error::RenderError;
 use crate::scene::desc::{GeometryDesc, ShapeDesc};
 use bvh::{Aabb, Bvh};
 use glam::{Affine3A, Mat3, Mat4, Vec3, Vec3A, Vec4};

@@ -99,11 +99,11 @@
 
 use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
+use crate::error::RenderError;
 use crate::geometry::Ray;
 use crate::math::{Sampler, Spectrum};
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
-use crate::render::RenderError;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
 use glam::{Affine3A, DVec3, Vec3};
@@ -165,8 +165,10 @@ impl NonExp {
                     DavisWeinstein::new(s, h, c).map(Model::from)
                 }
             };
-            models[c] =
-                Some(m.map_err(|e| RenderError::InvalidScene(format!("medium {index}: {e}")))?);
+            models[c] = Some(m.map_err(|source| RenderError::Param {
+                medium: index,
+                source,
+            })?);
         }
         if let Some(a) = albedo.iter().find(|a| !(0.0..=1.0).contains(*a)) {
             return Err(RenderError::InvalidScene(format!(
