@@ -5,7 +5,7 @@
 //! end at `far_clip`.
 
 use crate::error::RenderError;
-use crate::geometry::Ray;
+use crate::ray::Ray;
 use crate::scene::desc::{FovAxis, SensorDesc};
 use glam::{Affine3A, Vec3};
 

@@ -24,9 +24,10 @@ use crate::bsdf::Bsdf;
 use crate::camera::Camera;
 use crate::emitter::Emitter;
 use crate::error::RenderError;
-use crate::geometry::{offset_point, shadow_epsilon, Geometry, Hit, Ray};
+use crate::geometry::{Geometry, Hit};
 use crate::math::{max_comp, mis_power, Frame, Sampler, Spectrum, UNIFORM_SPHERE_PDF};
 use crate::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
+use crate::ray::{offset_point, shadow_epsilon, Ray};
 use crate::scene::desc::{IntegratorKind, SceneDesc};
 use glam::Vec3;
 

@@ -27,6 +27,7 @@ pub mod integrator;
 pub mod math;
 pub mod medium;
 pub mod phase;
+pub mod ray;
 pub mod render;
 
 pub use error::RenderError;

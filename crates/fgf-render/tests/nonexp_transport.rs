@@ -18,10 +18,10 @@
 //! 0.95^-n), and the estimated standard errors unreliable.
 
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
-use fgf_render::geometry::Ray;
 use fgf_render::integrator::World;
 use fgf_render::math::{sample_uniform_sphere, Sampler, Spectrum};
 use fgf_render::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
+use fgf_render::ray::Ray;
 use fgf_render::scene::desc::{MediumDesc, SceneDesc};
 use glam::Vec3;
 
@@ -528,7 +528,7 @@ fn reciprocal_kernel_is_reciprocal() {
                     let n = sample_uniform_sphere(s.next_2d());
                     let d = fgf_render::math::Frame::from_normal(n)
                         .to_world(fgf_render::math::sample_cosine_hemisphere(s.next_2d()));
-                    let o = fgf_render::geometry::offset_point(probe + n * r, n, d);
+                    let o = fgf_render::ray::offset_point(probe + n * r, n, d);
                     world.li(Ray { o, d }, f32::INFINITY, s)
                 })
             };

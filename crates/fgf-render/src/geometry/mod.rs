@@ -14,24 +14,11 @@
 pub mod bvh;
 
 use crate::error::RenderError;
+use crate::ray::Ray;
 use crate::scene::desc::{GeometryDesc, ShapeDesc};
 use bvh::{Aabb, Bvh};
 use glam::{Affine3A, Mat3, Mat4, Vec3, Vec3A, Vec4};
 use std::f32::consts::PI;
-
-/// A ray `o + t d` with unit `d`.
-#[derive(Debug, Clone, Copy)]
-pub struct Ray {
-    pub o: Vec3,
-    pub d: Vec3,
-}
-
-impl Ray {
-    #[inline]
-    pub fn at(&self, t: f32) -> Vec3 {
-        self.o + t * self.d
-    }
-}
 
 /// A surface hit.
 #[derive(Debug, Clone, Copy)]
@@ -49,31 +36,6 @@ pub struct Hit {
 /// distance and barycentrics.
 #[derive(Debug, Clone, Copy)]
 pub struct HitRecord((u32, f32, f32, f32));
-
-/// Relative size of the offset that moves a spawned ray off its surface:
-/// `(1 + max|p|)·2⁻¹⁶`. Triangle and sphere hit points carry a rounding
-/// error of a few ulps of `|p|` (≈ 1e-7·|p|); the offset is two orders of
-/// magnitude above that, and still far below any feature of a scene in
-/// metre-ish units. (Mitsuba uses a comparable `mint` of ≈ 9e-5·(1 + max|p|).)
-const OFFSET_SCALE: f32 = 1.0 / 65536.0;
-
-/// Offset of the hit point `p` along `n`, to the side `d` points to.
-#[inline]
-pub fn offset_point(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
-    let eps = (1.0 + p.abs().max_element()) * OFFSET_SCALE;
-    if d.dot(n) >= 0.0 {
-        p + eps * n
-    } else {
-        p - eps * n
-    }
-}
-
-/// Distance to stop a shadow ray short of a sampled light point `q`, so that
-/// it does not hit the light's own surface.
-#[inline]
-pub fn shadow_epsilon(q: Vec3) -> f32 {
-    4.0 * (1.0 + q.abs().max_element()) * OFFSET_SCALE
-}
 
 /// A triangle `v0 + u e1 + v e2` (`u, v ≥ 0`, `u + v ≤ 1`) or, with
 /// `quad`, a parallelogram (`0 ≤ u, v ≤ 1`). `cube` faces and `rectangle`s

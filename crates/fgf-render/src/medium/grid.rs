@@ -30,9 +30,9 @@
 
 use super::{DistanceEvent, DistanceSample};
 use crate::error::RenderError;
-use crate::geometry::Ray;
 use crate::math::{mean, Sampler, Spectrum};
 use crate::phase::Phase;
+use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, VolumeDesc};
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;

@@ -13,9 +13,9 @@
 //! per-segment mixture is kept for callers that sample a single flight.
 
 use super::{DistanceEvent, DistanceSample};
-use crate::geometry::Ray;
 use crate::math::{mean, Sampler, Spectrum};
 use crate::phase::Phase;
+use crate::ray::Ray;
 
 #[derive(Debug, Clone)]
 pub struct Homogeneous {

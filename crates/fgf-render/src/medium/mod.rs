@@ -53,9 +53,9 @@ pub mod homogeneous;
 pub mod nonexp;
 
 use crate::error::RenderError;
-use crate::geometry::Ray;
 use crate::math::{Sampler, Spectrum};
 use crate::phase::Phase;
+use crate::ray::Ray;
 use crate::scene::desc::{MediumDesc, VolumeDesc};
 
 /// How the current free-flight segment started (`theory.md` §4).

@@ -100,10 +100,10 @@
 use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
 use crate::error::RenderError;
-use crate::geometry::Ray;
 use crate::math::{Sampler, Spectrum};
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
+use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
 use glam::{Affine3A, DVec3, Vec3};
