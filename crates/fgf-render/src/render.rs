@@ -20,9 +20,9 @@
 
 use crate::error::RenderError;
 use crate::film::{Accum, Filter, RenderOutput};
-use crate::integrator::World;
 use crate::math::Sampler;
 use crate::scene::desc::SceneDesc;
+use crate::world::World;
 use fgf_core::Progress;
 use rayon::prelude::*;
 

@@ -459,9 +459,9 @@ fn cancellation_returns_completed_passes() {
 /// shadow-ray offsets: a light must not shadow itself at grazing angles.
 #[test]
 fn disk_light_on_ground_matches_quadrature() {
-    use fgf_render::integrator::World;
     use fgf_render::math::Sampler;
     use fgf_render::ray::Ray;
+    use fgf_render::world::World;
     let ground = ShapeDesc {
         name: "ground".into(),
         geometry: GeometryDesc::Rectangle,
