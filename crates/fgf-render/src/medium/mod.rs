@@ -47,6 +47,7 @@
 //! </shape>
 //! ```
 
+pub mod dda;
 pub mod flight_table;
 pub mod grid;
 pub mod homogeneous;

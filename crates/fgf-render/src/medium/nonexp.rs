@@ -97,6 +97,7 @@
 //! the grid's box `ρ = 0` (the medium is empty there, as for Mitsuba's
 //! `heterogeneous`).
 
+use super::dda::{self, Lattice};
 use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
 use crate::error::RenderError;
@@ -106,7 +107,8 @@ use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
-use glam::{Affine3A, DVec3, Vec3};
+use glam::{DVec3, Vec3};
+use std::ops::ControlFlow;
 
 /// A non-exponential medium; see the module docs.
 #[derive(Debug, Clone)]
@@ -433,13 +435,9 @@ const INVERT_MAX_ITER: u32 = 60;
 #[derive(Debug, Clone)]
 struct Density {
     tex: GridTex,
-    /// World to unit-cube coordinates (f64: the piece boundaries are found
-    /// from it).
-    to_unit: Affine3A,
-    res: [f64; 3],
-    /// Offset of the piece boundaries in voxel units: 0.5 (voxel centres)
-    /// for trilinear, 0 (voxel faces) for nearest.
-    offset: f64,
+    /// The planes where the interpolant changes polynomial piece: voxel
+    /// centres (offset 0.5) for trilinear, voxel faces (0) for nearest.
+    pieces: Lattice<f64>,
 }
 
 impl Density {
@@ -452,26 +450,15 @@ impl Density {
                 g.grid.channels
             )));
         }
-        // Same world → unit-cube map as the grid texture (GridTex::new has
-        // already rejected a singular to_world and an empty bbox).
-        let mut to_unit = Affine3A::from_mat4(g.to_world).inverse();
-        if g.use_grid_bbox {
-            let b = g.grid.bbox;
-            let lo = Vec3::new(b[0], b[1], b[2]);
-            let ext = Vec3::new(b[3], b[4], b[5]) - lo;
-            to_unit = Affine3A::from_scale(ext.recip()) * Affine3A::from_translation(-lo) * to_unit;
-        }
-        let res = g.grid.shape.map(|n| n as f64);
-        let offset = match g.filter {
+        let offset = match tex.filter() {
             GridFilter::Trilinear => 0.5,
             GridFilter::Nearest => 0.0,
         };
-        Ok(Density {
-            tex,
-            to_unit,
-            res,
+        let pieces = Lattice {
+            res: tex.res(),
             offset,
-        })
+        };
+        Ok(Density { tex, pieces })
     }
 
     #[inline]
@@ -492,82 +479,21 @@ impl Density {
         h * (self.rho(o, d, m - h * G) + self.rho(o, d, m + h * G))
     }
 
-    /// The ray in unit-cube coordinates (same parameter `t` as the world ray).
+    /// The ray in unit-cube coordinates (same parameter `t` as the world
+    /// ray), in f64 for the piece boundaries.
     #[inline]
     fn unit_ray(&self, ray: &Ray) -> (DVec3, DVec3) {
-        let o = self.to_unit.transform_point3(ray.o);
-        let d = self.to_unit.transform_vector3(ray.d);
-        (
-            DVec3::new(o.x as f64, o.y as f64, o.z as f64),
-            DVec3::new(d.x as f64, d.y as f64, d.z as f64),
-        )
-    }
-
-    /// Walk the polynomial pieces of `ρ` along the ray over `[0, t_max]`
-    /// inside the unit cube, calling `f(a, b)` in order; stops when `f`
-    /// returns `Some`.
-    fn walk<R>(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        t_max: f64,
-        mut f: impl FnMut(f64, f64) -> Option<R>,
-    ) -> Option<R> {
-        // Clip to the unit cube.
-        let inv = d.recip();
-        let ta = (DVec3::ZERO - o) * inv;
-        let tb = (DVec3::ONE - o) * inv;
-        let t_in = ta.min(tb).max_element().max(0.0);
-        let t_out = ta.max(tb).min_element().min(t_max);
-        // Also false for NaN bounds (a degenerate ray): nothing to walk.
-        if t_in.partial_cmp(&t_out) != Some(std::cmp::Ordering::Less) {
-            return None;
-        }
-        // Per axis: the next boundary plane (j + offset)/res crossed after
-        // t_in, and the parameter step between successive planes.
-        let mut t_next = [f64::INFINITY; 3];
-        let mut dt = [f64::INFINITY; 3];
-        for k in 0..3 {
-            if d[k] == 0.0 {
-                continue;
-            }
-            let x = (o[k] + d[k] * t_in) * self.res[k] - self.offset;
-            let j = if d[k] > 0.0 {
-                x.floor() + 1.0
-            } else {
-                x.ceil() - 1.0
-            };
-            t_next[k] = ((j + self.offset) / self.res[k] - o[k]) * inv[k];
-            dt[k] = (inv[k] / self.res[k]).abs();
-        }
-        let mut t = t_in;
-        while t < t_out {
-            let k = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
-                0
-            } else if t_next[1] <= t_next[2] {
-                1
-            } else {
-                2
-            };
-            let t1 = t_next[k].min(t_out);
-            if t1 > t {
-                if let Some(r) = f(t, t1) {
-                    return Some(r);
-                }
-                t = t1;
-            }
-            t_next[k] += dt[k];
-        }
-        None
+        let (o, d) = self.tex.unit_ray(ray);
+        (o.as_dvec3(), d.as_dvec3())
     }
 
     /// `s(t_end) = ∫_0^t_end ρ` along `ray` (world parameter).
     fn optical_path(&self, ray: &Ray, t_end: f64) -> f64 {
         let (o, d) = self.unit_ray(ray);
         let mut sum = 0.0;
-        self.walk(o, d, t_end, |a, b| -> Option<()> {
+        let _: ControlFlow<()> = dda::walk(o, d, t_end, &self.pieces, |a, b, _| {
             sum += self.piece_integral(o, d, a, b);
-            None
+            ControlFlow::Continue(())
         });
         sum
     }
@@ -577,11 +503,11 @@ impl Density {
     fn invert(&self, ray: &Ray, t_max: f64, s_star: f64) -> (Option<f64>, f64) {
         let (o, d) = self.unit_ray(ray);
         let mut sum = 0.0;
-        let hit = self.walk(o, d, t_max, |a, b| {
+        let hit = dda::walk(o, d, t_max, &self.pieces, |a, b, _| {
             let piece = self.piece_integral(o, d, a, b);
             if sum + piece < s_star {
                 sum += piece;
-                return None;
+                return ControlFlow::Continue(());
             }
             // The root lies in [a, b]: F(t) = ∫_a^t ρ - r is increasing
             // (ρ ≥ 0) with F' = ρ(t). Newton from the linear guess, kept in
@@ -608,15 +534,15 @@ impl Density {
                     0.5 * (lo + hi)
                 };
                 if (next - t).abs() <= INVERT_TOL * (b - a) || hi - lo <= INVERT_TOL * (b - a) {
-                    return Some(next);
+                    return ControlFlow::Break(next);
                 }
                 t = next;
             }
-            Some(t)
+            ControlFlow::Break(t)
         });
         match hit {
-            Some(t) => (Some(t), s_star),
-            None => (None, sum),
+            ControlFlow::Break(t) => (Some(t), s_star),
+            ControlFlow::Continue(()) => (None, sum),
         }
     }
 }
