@@ -18,8 +18,9 @@
 //! </bsdf>
 //! ```
 
-use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Spectrum};
+use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::scene::desc::BsdfDesc;
+use crate::spectrum::Spectrum;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -67,7 +68,7 @@ pub struct BsdfSample {
 
 impl Bsdf {
     pub fn from_desc(d: &BsdfDesc) -> Bsdf {
-        let c = crate::math::rgb;
+        let c = crate::spectrum::from_rgb;
         match d {
             BsdfDesc::Diffuse { reflectance } => Bsdf {
                 kind: BsdfKind::Diffuse {

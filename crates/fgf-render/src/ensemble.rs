@@ -60,7 +60,7 @@ use crate::math::mix64;
 use crate::medium::grid::GridTex;
 use crate::render::{render, RenderOptions};
 use crate::scene::desc::{
-    GridFilter, GridVolumeDesc, MediumDesc, SceneDesc, TransmittanceDesc, VolumeDesc,
+    GridFilter, GridVolumeDesc, MediumDesc, Rgb, SceneDesc, TransmittanceDesc, VolumeDesc,
 };
 use fgf_core::transmittance::Fgf;
 use fgf_core::Progress;
@@ -166,7 +166,7 @@ impl Progress for CancelOnly<'_> {
 /// One `fgf` medium's synthesis plan.
 struct Plan {
     medium: usize,
-    sigma_t: [f32; 3],
+    sigma_t: Rgb,
     grey: bool,
     params: SynthParams,
     shape: [usize; 3],

@@ -21,8 +21,9 @@
 //! Each pixel keeps running sums of its samples ([`Accum`]), from which
 //! [`RenderOutput`] takes the pixel means and, if asked, their variances.
 
-use crate::math::{Sampler, Spectrum};
+use crate::math::Sampler;
 use crate::scene::desc::FilterDesc;
+use crate::spectrum::Spectrum;
 
 const GAUSS_BINS: usize = 1024;
 

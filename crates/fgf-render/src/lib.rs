@@ -29,6 +29,7 @@ pub mod medium;
 pub mod phase;
 pub mod ray;
 pub mod render;
+pub mod spectrum;
 pub mod world;
 
 pub use error::RenderError;

@@ -85,7 +85,7 @@ pub fn render(
                     // A NaN or infinite sample (a numerical failure, e.g. a
                     // zero pdf) would poison the pixel forever: drop it to 0.
                     if !l.is_finite() {
-                        l = crate::math::Spectrum::ZERO;
+                        l = crate::spectrum::Spectrum::ZERO;
                     }
                     a.add(l, opts.variance);
                 }

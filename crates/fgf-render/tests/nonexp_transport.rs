@@ -18,10 +18,11 @@
 //! 0.95^-n), and the estimated standard errors unreliable.
 
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
-use fgf_render::math::{sample_uniform_sphere, Sampler, Spectrum};
+use fgf_render::math::{sample_uniform_sphere, Sampler};
 use fgf_render::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
 use fgf_render::ray::Ray;
 use fgf_render::scene::desc::{MediumDesc, SceneDesc};
+use fgf_render::spectrum::Spectrum;
 use fgf_render::world::World;
 use glam::Vec3;
 

@@ -9,10 +9,11 @@
 use crate::bsdf::Bsdf;
 use crate::emitter::LightSample;
 use crate::geometry::Hit;
-use crate::math::{mis_power, Frame, Sampler, Spectrum};
+use crate::math::{mis_power, Frame, Sampler};
 use crate::medium::{SegmentEnd, SegmentStart};
 use crate::phase::Phase;
 use crate::ray::{offset_point, shadow_epsilon, Ray};
+use crate::spectrum::Spectrum;
 use crate::world::{ShapeInfo, World};
 use glam::Vec3;
 

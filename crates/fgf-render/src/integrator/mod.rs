@@ -25,9 +25,10 @@ mod direct;
 
 use crate::emitter::Emitter;
 use crate::geometry::Hit;
-use crate::math::{max_comp, mis_power, Frame, Sampler, Spectrum, UNIFORM_SPHERE_PDF};
+use crate::math::{mis_power, Frame, Sampler, UNIFORM_SPHERE_PDF};
 use crate::medium::{DistanceEvent, SegmentStart};
 use crate::ray::{offset_point, Ray};
+use crate::spectrum::{max_comp, Spectrum};
 use crate::world::World;
 use direct::{MediumVertex, SurfaceVertex};
 
@@ -98,7 +99,7 @@ impl World {
                     r_u /= rm;
                     thr /= rm;
                 }
-                inv_mis = 1.0 / crate::math::mean(r_u);
+                inv_mis = 1.0 / crate::spectrum::mean(r_u);
                 if ds.event == DistanceEvent::Scatter {
                     depth += 1;
                     if depth >= self.max_depth || thr == Spectrum::ZERO {

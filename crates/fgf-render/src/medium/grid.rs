@@ -31,10 +31,11 @@
 use super::dda::{self, Lattice};
 use super::{DistanceEvent, DistanceSample};
 use crate::error::RenderError;
-use crate::math::{mean, Sampler, Spectrum};
+use crate::math::Sampler;
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, VolumeDesc};
+use crate::spectrum::{mean, Spectrum};
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 
@@ -267,7 +268,7 @@ impl GridMedium {
         }
         let tex = GridTex::new(sigma_t, &what)?;
         let albedo = match albedo {
-            VolumeDesc::Constant(a) => Albedo::Constant(crate::math::rgb(*a)),
+            VolumeDesc::Constant(a) => Albedo::Constant(crate::spectrum::from_rgb(*a)),
             VolumeDesc::Grid(g) => {
                 Albedo::Grid(GridTex::new(g, &format!("medium {index} albedo"))?)
             }
@@ -295,7 +296,7 @@ impl GridMedium {
                     for z in z0..=z1 {
                         for y in y0..=y1 {
                             for x in x0..=x1 {
-                                m = m.max(crate::math::max_comp(tex.voxel(x, y, z)));
+                                m = m.max(crate::spectrum::max_comp(tex.voxel(x, y, z)));
                             }
                         }
                     }
@@ -425,7 +426,7 @@ impl GridMedium {
             // Russian roulette on small estimates keeps the cost bounded
             // in dense regions; survivors are reweighted by 1/q, so the
             // estimator stays unbiased.
-            let m = crate::math::max_comp(tr);
+            let m = crate::spectrum::max_comp(tr);
             if m < 0.1 {
                 let q = 0.75;
                 if s.next_1d() < q {

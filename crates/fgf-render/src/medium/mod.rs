@@ -54,10 +54,11 @@ pub mod homogeneous;
 pub mod nonexp;
 
 use crate::error::RenderError;
-use crate::math::{Sampler, Spectrum};
+use crate::math::Sampler;
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::scene::desc::{MediumDesc, VolumeDesc};
+use crate::spectrum::{from_rgb, Spectrum};
 
 /// How the current free-flight segment started (`theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -104,26 +105,48 @@ pub enum Medium {
 }
 
 impl Medium {
+    /// Build medium `index` of the scene from its description.
     pub fn from_desc(d: &MediumDesc, index: usize) -> Result<Medium, RenderError> {
+        let homogeneous = |sigma_t: Spectrum, albedo, phase| {
+            let m =
+                homogeneous::Homogeneous::new(sigma_t, from_rgb(albedo), Phase::from_desc(phase));
+            Ok(Medium::Homogeneous(m))
+        };
         match d {
-            MediumDesc::Homogeneous { sigma_t, albedo, phase } => {
-                Ok(Medium::Homogeneous(homogeneous::Homogeneous::new(crate::math::rgb(*sigma_t), crate::math::rgb(*albedo), Phase::from_desc(phase))))
-            }
-            MediumDesc::Heterogeneous { sigma_t: VolumeDesc::Constant(s), albedo: VolumeDesc::Constant(a), scale, phase } => {
+            MediumDesc::Homogeneous {
+                sigma_t,
+                albedo,
+                phase,
+            } => homogeneous(from_rgb(*sigma_t), *albedo, phase),
+            MediumDesc::Heterogeneous {
+                sigma_t: VolumeDesc::Constant(s),
+                albedo: VolumeDesc::Constant(a),
+                scale,
+                phase,
+            } => {
                 // Constant volumes make a homogeneous medium (same transport).
-                Ok(Medium::Homogeneous(homogeneous::Homogeneous::new(
-                    crate::math::rgb(*s) * *scale,
-                    crate::math::rgb(*a),
-                    Phase::from_desc(phase),
-                )))
+                homogeneous(from_rgb(*s) * *scale, *a, phase)
             }
-            MediumDesc::Heterogeneous { sigma_t: VolumeDesc::Grid(g), albedo, scale, phase } => {
-                Ok(Medium::Grid(Box::new(grid::GridMedium::new(g, albedo, *scale, Phase::from_desc(phase), index)?)))
+            MediumDesc::Heterogeneous {
+                sigma_t: VolumeDesc::Grid(g),
+                albedo,
+                scale,
+                phase,
+            } => {
+                let m = grid::GridMedium::new(g, albedo, *scale, Phase::from_desc(phase), index)?;
+                Ok(Medium::Grid(Box::new(m)))
             }
-            MediumDesc::Heterogeneous { sigma_t: VolumeDesc::Constant(_), albedo: VolumeDesc::Grid(_), .. } => Err(RenderError::Unsupported(format!(
-                "medium {index}: a heterogeneous medium with a constant sigma_t and a grid albedo is not supported; give sigma_t as a gridvolume"
+            MediumDesc::Heterogeneous {
+                sigma_t: VolumeDesc::Constant(_),
+                albedo: VolumeDesc::Grid(_),
+                ..
+            } => Err(RenderError::Unsupported(format!(
+                "medium {index}: a heterogeneous medium with a constant sigma_t and a grid albedo \
+                 is not supported; give sigma_t as a gridvolume"
             ))),
-            MediumDesc::NonExponential { .. } => Ok(Medium::NonExp(Box::new(nonexp::NonExp::from_desc(d, index)?))),
+            MediumDesc::NonExponential { .. } => Ok(Medium::NonExp(Box::new(
+                nonexp::NonExp::from_desc(d, index)?,
+            ))),
         }
     }
 

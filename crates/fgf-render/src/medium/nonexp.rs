@@ -101,11 +101,12 @@ use super::dda::{self, Lattice};
 use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
 use crate::error::RenderError;
-use crate::math::{Sampler, Spectrum};
+use crate::math::Sampler;
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
+use crate::spectrum::Spectrum;
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
 use glam::{DVec3, Vec3};
 use std::ops::ControlFlow;
@@ -125,9 +126,6 @@ pub struct NonExp {
     pub phase: Phase,
     density: Option<Density>,
 }
-
-/// The per-channel value that a function of the models returns.
-type Rgb64 = [f64; 3];
 
 impl NonExp {
     /// Build from a `MediumDesc::NonExponential`; `index` names the medium in
@@ -196,17 +194,18 @@ impl NonExp {
             models,
             grey,
             tables,
-            albedo: crate::math::rgb(*albedo),
+            albedo: crate::spectrum::from_rgb(*albedo),
             kernel: *kernel,
             phase: Phase::from_desc(phase),
             density,
         })
     }
 
-    /// `f(M_c)` for each channel, `empty` for a transparent channel; computed
-    /// once for a grey medium.
+    /// `f(M_c)` for each channel (in f64, made a [`Spectrum`] only as the
+    /// ratios below), `empty` for a transparent channel; computed once for a
+    /// grey medium.
     #[inline]
-    fn per_channel(&self, empty: f64, f: impl Fn(&Model) -> f64) -> Rgb64 {
+    fn per_channel(&self, empty: f64, f: impl Fn(&Model) -> f64) -> [f64; 3] {
         let g = |m: &Option<Model>| m.as_ref().map_or(empty, &f);
         if self.grey {
             let v = g(&self.models[0]);
@@ -405,7 +404,7 @@ impl NonExp {
 /// an underflowed `T_ms` far away) it returns `fallback` in every channel,
 /// the grey-medium value of the ratio, instead of a NaN.
 #[inline]
-fn ratio_to_mean(v: Rgb64, fallback: f64) -> Spectrum {
+fn ratio_to_mean(v: [f64; 3], fallback: f64) -> Spectrum {
     let m = (v[0] + v[1] + v[2]) / 3.0;
     if m > 0.0 && m.is_finite() {
         Spectrum::new((v[0] / m) as f32, (v[1] / m) as f32, (v[2] / m) as f32)
@@ -416,7 +415,7 @@ fn ratio_to_mean(v: Rgb64, fallback: f64) -> Spectrum {
 
 /// `v / v[hero]` per channel, or `None` when `v[hero]` is 0 or not finite.
 #[inline]
-fn ratio_to(v: Rgb64, hero: usize) -> Option<Spectrum> {
+fn ratio_to(v: [f64; 3], hero: usize) -> Option<Spectrum> {
     let h = v[hero];
     (h > 0.0 && h.is_finite())
         .then(|| Spectrum::new((v[0] / h) as f32, (v[1] / h) as f32, (v[2] / h) as f32))
