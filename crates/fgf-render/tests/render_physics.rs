@@ -11,6 +11,9 @@
 //! error rate is below 23 × 6.3e-5 ≈ 1.5e-3 (Bonferroni). Seeds are fixed,
 //! so a pass is reproducible.
 
+mod common;
+
+use common::{assert_close, reference_scene};
 use fgf_core::{NoProgress, Progress};
 use fgf_io::vol::VolGrid;
 use fgf_render::scene::desc::*;
@@ -110,20 +113,6 @@ fn image_mean(out: &fgf_render::RenderOutput) -> ([f64; 3], [f64; 3]) {
     (m, se)
 }
 
-fn assert_close(what: &str, got: [f64; 3], se: [f64; 3], expected: [f64; 3]) {
-    for c in 0..3 {
-        let err = (got[c] - expected[c]).abs();
-        assert!(
-            err <= Z * se[c] && se[c] > 0.0 || (se[c] == 0.0 && err < 1e-5),
-            "{what}, channel {c}: {} vs expected {} (SE {}, z = {:.2})",
-            got[c],
-            expected[c],
-            se[c],
-            err / se[c]
-        );
-    }
-}
-
 fn opts() -> RenderOptions {
     RenderOptions {
         variance: true,
@@ -171,7 +160,7 @@ fn furnace_homogeneous_returns_environment_radiance() {
     constant_env(&mut s, 0.7);
     let out = render(&s, &opts(), &NoProgress).unwrap();
     let (m, se) = image_mean(&out);
-    assert_close("homogeneous furnace", m, se, [0.7; 3]);
+    assert_close("homogeneous furnace", m, se, [0.7; 3], Z);
 }
 
 /// The same with the camera inside the medium (the sensor's medium).
@@ -196,7 +185,7 @@ fn furnace_with_camera_inside_medium() {
     constant_env(&mut s, 1.3);
     let out = render(&s, &opts(), &NoProgress).unwrap();
     let (m, se) = image_mean(&out);
-    assert_close("furnace, camera inside", m, se, [1.3; 3]);
+    assert_close("furnace, camera inside", m, se, [1.3; 3], Z);
 }
 
 /// Albedo-1 grid medium with a high-contrast random density (delta tracking
@@ -225,7 +214,7 @@ fn furnace_heterogeneous_returns_environment_radiance() {
     constant_env(&mut s, 0.9);
     let out = render(&s, &opts(), &NoProgress).unwrap();
     let (m, se) = image_mean(&out);
-    assert_close("heterogeneous furnace", m, se, [0.9; 3]);
+    assert_close("heterogeneous furnace", m, se, [0.9; 3], Z);
 }
 
 /// A purely absorbing slab of thickness `d` (z ∈ [0, d]) in front of a
@@ -246,7 +235,7 @@ fn slab_transmittance(medium: MediumDesc, sigma_t: [f64; 3]) {
     let out = render(&s, &opts(), &NoProgress).unwrap();
     let (m, se) = image_mean(&out);
     let expected = sigma_t.map(|st| 2.0 * (-st * d as f64).exp());
-    assert_close("slab transmittance", m, se, expected);
+    assert_close("slab transmittance", m, se, expected, Z);
 }
 
 #[test]
@@ -349,7 +338,7 @@ fn thin_slab_single_scattering(absorbers: usize) {
     let tau = absorbers as f64 * sigma_abs * h_abs;
     let expected = (-tau).exp() * (-tau / mu_l).exp() * l;
     let what = format!("single scattering under {absorbers} absorbers");
-    assert_close(&what, m, se, [expected; 3]);
+    assert_close(&what, m, se, [expected; 3], Z);
 }
 
 #[test]
@@ -393,17 +382,6 @@ fn max_depth_one_shows_only_direct_emission() {
     s.integrator.max_depth = 2;
     let out = render(&s, &RenderOptions::default(), &NoProgress).unwrap();
     assert!(out.image.iter().all(|&v| v > 0.0));
-}
-
-fn reference_scene(name: &str, res: u32, spp: u32) -> SceneDesc {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes")
-        .join(name);
-    let defines = [
-        ("res".to_string(), res.to_string()),
-        ("spp".to_string(), spp.to_string()),
-    ];
-    fgf_render::scene::load_file(&path, &defines).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Bit-identical images for 1 and 2 threads.
