@@ -9,6 +9,14 @@ use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
 
+/// What `ensemble_scene` returns: `(mean, stderr, info, interrupted)`.
+type EnsembleResult<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyDict>,
+    bool,
+);
+
 /// Average classical renders of `realizations` explicit 3D realizations of
 /// the scene's `fgf` media. Returns `(mean, stderr, info, interrupted)`
 /// where `info` is a dict (`realizations_done`, `spp`, and `media`: one dict
@@ -27,12 +35,7 @@ fn ensemble_scene<'py>(
     threads: Option<usize>,
     defines: Option<Vec<(String, String)>>,
     progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<(
-    Bound<'py, PyAny>,
-    Bound<'py, PyAny>,
-    Bound<'py, PyDict>,
-    bool,
-)> {
+) -> PyResult<EnsembleResult<'py>> {
     if realizations == 0 {
         return Err(ParameterError::new_err(
             "realizations = 0; need at least 1 (2 for a standard error)",

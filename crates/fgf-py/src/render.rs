@@ -79,6 +79,10 @@ pub(crate) fn in_pool<R: Send, E: From<RenderError> + Send>(
     }
 }
 
+/// What `render_scene` returns: `(image, variance or None, spp_done,
+/// interrupted)`.
+type RenderResult<'py> = (Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u32, bool);
+
 /// Render a Mitsuba 3 XML scene. Returns `(image, variance or None,
 /// spp_done, interrupted)`; the typed wrapper is `fgf.render`.
 #[pyfunction]
@@ -93,7 +97,7 @@ fn render_scene<'py>(
     defines: Option<Vec<(String, String)>>,
     progress: Option<Bound<'py, PyAny>>,
     return_variance: bool,
-) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u32, bool)> {
+) -> PyResult<RenderResult<'py>> {
     check_spp_threads(spp, threads)?;
     let desc = load_scene(py, &scene, defines)?;
     let opts = RenderOptions {

@@ -6,7 +6,7 @@
 //!
 //! | XML | parameters | notes |
 //! |---|---|---|
-//! | `diffuse` | `reflectance` (rgb in [0,1], default 0.5) | one-sided: black seen from the back |
+//! | `diffuse` | `reflectance` (rgb in \[0, 1\], default 0.5) | one-sided: black seen from the back |
 //! | `null` | — | index-matched boundary: the path passes straight through; it neither counts toward `max_depth` nor is lit |
 //! | `dielectric` | `int_ior` (inside, default 1.5046), `ext_ior` (default 1.000277), `specular_reflectance`, `specular_transmittance` (default 1) | smooth, both sides; transmitted radiance is scaled by `(η_i/η_t)²` (Mitsuba's non-symmetric transport in radiance mode) |
 //! | `conductor` | `material` or `eta`, `k`, `specular_reflectance` | smooth, complex Fresnel per channel; one-sided |

@@ -115,7 +115,7 @@ fn validate_structure(desc: &SceneDesc) -> Result<(), RenderError> {
 }
 
 impl World {
-    /// Compile `desc` (checked first by [`validate_structure`]).
+    /// Compile `desc` (checked first by `validate_structure`).
     pub fn build(desc: &SceneDesc) -> Result<World, RenderError> {
         validate_structure(desc)?;
         let geom = Geometry::build(&desc.shapes)?;

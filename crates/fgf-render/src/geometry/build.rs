@@ -86,7 +86,7 @@ struct Builder {
 }
 
 impl Geometry {
-    /// Compile `shapes` (each checked by [`validate`] first) and build the
+    /// Compile `shapes` (each checked by `validate` first) and build the
     /// BVH over all their primitives.
     pub fn build(shapes: &[ShapeDesc]) -> Result<Geometry, RenderError> {
         let mut g = Builder::default();

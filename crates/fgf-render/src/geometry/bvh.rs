@@ -294,7 +294,11 @@ fn build_rec(
             }
             let cost =
                 acc.surface_area() * packs(cnt) + right_area[split] * packs(right_count[split]);
-            if best.map_or(true, |(c, _, _)| cost < c) {
+            let better = match best {
+                Some((c, _, _)) => cost < c,
+                None => true,
+            };
+            if better {
                 best = Some((cost, axis, split));
             }
         }

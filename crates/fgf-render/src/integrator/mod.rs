@@ -1,5 +1,5 @@
 //! The volumetric path tracer: [`World::li`], the radiance of one camera
-//! sample. Next-event estimation and shadow rays are in [`direct`].
+//! sample. Next-event estimation and shadow rays are in `direct.rs`.
 //!
 //! `volpath` (and `path`, the same code on scenes without media) follows
 //! Mitsuba 3's semantics, so both renderers converge to the same image:

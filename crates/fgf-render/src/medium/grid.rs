@@ -59,9 +59,7 @@ impl GridTex {
                 g.channels
             )));
         }
-        if g.shape.iter().any(|&n| n == 0)
-            || g.data.len() != g.shape.iter().product::<usize>() * g.channels
-        {
+        if g.shape.contains(&0) || g.data.len() != g.shape.iter().product::<usize>() * g.channels {
             return Err(RenderError::InvalidScene(format!(
                 "{what}: grid data does not match its {:?} shape",
                 g.shape

@@ -21,7 +21,7 @@
 //!   and ends on `end` (a light or a surface crossing is a `Surface` end).
 //!
 //! Classical (exponential) media ignore `start`/`end`: their transmittance
-//! is multiplicative. Non-exponential media (`theory.md` §4, issue 5) use
+//! is multiplicative. Non-exponential media (`theory.md` §4) use
 //! them to choose between the kernels: energy-conserving (free flights from
 //! `pdf = -dTr/dt`, shadow rays `Tr`) or reciprocal (free flights from
 //! `T_sm` after a `Surface` start and `T_mm` after a `Medium` start; shadow
@@ -32,7 +32,7 @@
 //!
 //! | XML | parameters | notes |
 //! |---|---|---|
-//! | `homogeneous` | `sigma_t` (1/m, float or rgb, default 1), `albedo` (float or rgb in [0,1], default 0.75), `scale` (default 1), `phase` | analytic free flights, one-sample MIS over the RGB channels |
+//! | `homogeneous` | `sigma_t` (1/length, float or rgb, default 1), `albedo` (float or rgb in \[0, 1\], default 0.75), `scale` (default 1), `phase` | analytic free flights, one-sample MIS over the RGB channels |
 //! | `heterogeneous` | `sigma_t` and `albedo` as `gridvolume` or constants, `scale`, `phase` | delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA |
 //! | `fgf`, `nonexponential` | `sigma_t`, `albedo`, `scale`, `phase`; `hurst`, `sw`, `length` (fgf) or `transmittance` with `alpha` / `h`, `c`; `kernel`; optional `density` gridvolume | non-exponential transmittance (`theory.md` §3–4): see [`nonexp`] |
 //!
@@ -100,7 +100,7 @@ pub struct DistanceSample {
 pub enum Medium {
     Homogeneous(homogeneous::Homogeneous),
     Grid(Box<grid::GridMedium>),
-    /// `fgf` and `nonexponential` (issue 5; [`nonexp`]).
+    /// `fgf` and `nonexponential` ([`nonexp`]).
     NonExp(Box<nonexp::NonExp>),
 }
 

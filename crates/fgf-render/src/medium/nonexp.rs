@@ -1,5 +1,5 @@
 //! Non-exponential media: the `fgf` and `nonexponential` plugins
-//! (`theory.md` §3–4, issue 5).
+//! (`theory.md` §3–4).
 //!
 //! # User documentation
 //!
