@@ -85,9 +85,11 @@ fn cube(to_world: Mat4, interior: Option<MediumId>) -> ShapeDesc {
     }
 }
 
-/// Mean over all pixels per channel and its standard error (pixels are
-/// independent, so the variances of the pixel means add).
-fn image_mean(out: &fgf_render::RenderOutput) -> ([f64; 3], [f64; 3]) {
+/// Render `s` and return the mean over all pixels per channel and its
+/// standard error (pixels are independent, so the variances of the pixel
+/// means add).
+fn image_mean(s: &SceneDesc) -> ([f64; 3], [f64; 3]) {
+    let out = render(s, &opts(), &NoProgress).unwrap();
     let n = (out.width * out.height) as f64;
     let var = out.variance.as_ref().expect("variance requested");
     let mut m = [0.0; 3];
@@ -124,6 +126,14 @@ fn constant_env(s: &mut SceneDesc, l: f32) {
     s.emitters.push(EmitterDesc::Constant { radiance: [l; 3] });
 }
 
+/// A furnace: under a `constant` environment of radiance `l` the image
+/// mean of `s` (whose media have albedo 1) is `l`.
+fn assert_furnace(label: &str, s: &mut SceneDesc, l: f32) {
+    constant_env(s, l);
+    let (m, se) = image_mean(s);
+    assert_close(label, m, se, [l as f64; 3], Z);
+}
+
 fn random_grid(res: usize, seed: u64, max: f32) -> Arc<VolGrid> {
     let mut x = seed;
     let data = (0..res * res * res)
@@ -157,10 +167,7 @@ fn furnace_homogeneous_returns_environment_radiance() {
         phase: PhaseDesc::Hg { g: 0.4 },
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
-    constant_env(&mut s, 0.7);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    assert_close("homogeneous furnace", m, se, [0.7; 3], Z);
+    assert_furnace("homogeneous furnace", &mut s, 0.7);
 }
 
 /// The same with the camera inside the medium (the sensor's medium).
@@ -182,10 +189,7 @@ fn furnace_with_camera_inside_medium() {
         phase: PhaseDesc::Isotropic,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
-    constant_env(&mut s, 1.3);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    assert_close("furnace, camera inside", m, se, [1.3; 3], Z);
+    assert_furnace("furnace, camera inside", &mut s, 1.3);
 }
 
 /// Albedo-1 grid medium with a high-contrast random density (delta tracking
@@ -211,10 +215,7 @@ fn furnace_heterogeneous_returns_environment_radiance() {
         phase: PhaseDesc::Isotropic,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
-    constant_env(&mut s, 0.9);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    assert_close("heterogeneous furnace", m, se, [0.9; 3], Z);
+    assert_furnace("heterogeneous furnace", &mut s, 0.9);
 }
 
 /// A purely absorbing slab of thickness `d` (z ∈ [0, d]) in front of a
@@ -232,8 +233,7 @@ fn slab_transmittance(medium: MediumDesc, sigma_t: [f64; 3]) {
         * Mat4::from_scale(Vec3::new(10.0, 10.0, d / 2.0));
     s.shapes.push(cube(slab, Some(0)));
     constant_env(&mut s, 2.0);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
+    let (m, se) = image_mean(&s);
     let expected = sigma_t.map(|st| 2.0 * (-st * d as f64).exp());
     assert_close("slab transmittance", m, se, expected, Z);
 }
@@ -321,8 +321,7 @@ fn thin_slab_single_scattering(absorbers: usize) {
         direction: light_dir,
         irradiance: [e as f32; 3],
     });
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
+    let (m, se) = image_mean(&s);
     let mu_l = 0.8f64;
     // Propagation -z against the direction toward the light, -light_dir.
     let cos = Vec3::new(0.0, 0.0, -1.0).dot(-light_dir) as f64;
