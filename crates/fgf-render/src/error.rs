@@ -5,16 +5,16 @@
 //!
 //! A cancelled job is an error too, [`RenderError::Cancelled`], which
 //! carries the image of the passes finished so that a front end can still
-//! write it (the ensemble's [`crate::ensemble::EnsembleError`] does the same
-//! with the realizations finished).
+//! write it (the ensemble's `EnsembleError` does the same with the
+//! realizations finished).
 
 use crate::film::RenderOutput;
 use fgf_core::ParamError;
 use fgf_field::FieldError;
 
-/// Errors of [`crate::render()`](crate::render::render) and the modules it
-/// builds on: the scene problems found when compiling a scene, features
-/// outside the supported subset, bad options, and cancellation.
+/// Errors of `render()` and the modules it builds on: the scene problems
+/// found when compiling a scene, features outside the supported subset, bad
+/// options, and cancellation.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
     /// The scene description is invalid.

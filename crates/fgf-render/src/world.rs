@@ -1,6 +1,6 @@
 //! The scene compiled for rendering: [`World::build`] turns a [`SceneDesc`]
 //! into the geometry with its BVH, the BSDFs, emitters, media and camera
-//! the path tracer ([`crate::integrator`]) reads.
+//! the path tracer (`integrator`) reads.
 
 use crate::bsdf::Bsdf;
 use crate::camera::Camera;
