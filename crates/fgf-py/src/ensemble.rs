@@ -1,13 +1,21 @@
-//! Python binding of the explicit-realization ensemble (issue 5):
+//! Python binding of the explicit-realization ensemble:
 //! `ensemble_scene` behind `fgf.ensemble` and `fgf ensemble`.
 
 use crate::errors::ParameterError;
 use crate::progress::run_job;
 use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
-use fgf_render::ensemble::{ensemble, total_samples, EnsembleOptions};
+use fgf_render::ensemble::{ensemble, total_samples, EnsembleError, EnsembleOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
+
+/// What `ensemble_scene` returns: `(mean, stderr, info, interrupted)`.
+type EnsembleResult<'py> = (
+    Bound<'py, PyAny>,
+    Bound<'py, PyAny>,
+    Bound<'py, PyDict>,
+    bool,
+);
 
 /// Average classical renders of `realizations` explicit 3D realizations of
 /// the scene's `fgf` media. Returns `(mean, stderr, info, interrupted)`
@@ -27,12 +35,7 @@ fn ensemble_scene<'py>(
     threads: Option<usize>,
     defines: Option<Vec<(String, String)>>,
     progress: Option<Bound<'py, PyAny>>,
-) -> PyResult<(
-    Bound<'py, PyAny>,
-    Bound<'py, PyAny>,
-    Bound<'py, PyDict>,
-    bool,
-)> {
+) -> PyResult<EnsembleResult<'py>> {
     if realizations == 0 {
         return Err(ParameterError::new_err(
             "realizations = 0; need at least 1 (2 for a standard error)",
@@ -57,8 +60,12 @@ fn ensemble_scene<'py>(
     let job = run_job(py, total, "ensemble", progress.as_ref(), |counter| {
         in_pool(threads, || ensemble(&desc, &opts, counter))
     })?;
-    let interrupted = job.interrupted;
-    let out = job.value.map_err(|e| render_err(e, &source))?;
+    // A cancelled ensemble still returns the realizations finished.
+    let (out, cancelled) = match job.value {
+        Ok(out) => (out, false),
+        Err(EnsembleError::Cancelled { partial }) => (*partial, true),
+        Err(EnsembleError::Render(e)) => return Err(render_err(e, &source)),
+    };
     let (h, w) = (out.height, out.width);
     let mean = to_hw3(py, out.mean, h, w)?;
     let stderr = to_hw3(py, out.stderr, h, w)?;
@@ -81,7 +88,7 @@ fn ensemble_scene<'py>(
         media.append(d)?;
     }
     info.set_item("media", media)?;
-    Ok((mean, stderr, info, interrupted || out.interrupted))
+    Ok((mean, stderr, info, job.interrupted || cancelled))
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

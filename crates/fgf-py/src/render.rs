@@ -19,7 +19,9 @@ pub(crate) fn scene_err(e: fgf_render::scene::SceneError) -> PyErr {
 
 pub(crate) fn render_err(e: RenderError, source: &str) -> PyErr {
     match e {
-        RenderError::InvalidOption(_) => ParameterError::new_err(e.to_string()),
+        RenderError::InvalidOption(_) | RenderError::Field { .. } => {
+            ParameterError::new_err(e.to_string())
+        }
         _ => SceneError::new_err(format!("{source}: {e}")),
     }
 }
@@ -62,20 +64,24 @@ pub(crate) fn load_scene(
 
 /// Run `go` on a local rayon pool of `threads` workers (all cores if
 /// `None`); the global pool is left alone.
-pub(crate) fn in_pool<R: Send>(
+pub(crate) fn in_pool<R: Send, E: From<RenderError> + Send>(
     threads: Option<usize>,
-    go: impl FnOnce() -> Result<R, RenderError> + Send,
-) -> Result<R, RenderError> {
+    go: impl FnOnce() -> Result<R, E> + Send,
+) -> Result<R, E> {
     match threads {
         Some(t) => match rayon::ThreadPoolBuilder::new().num_threads(t).build() {
             Ok(pool) => pool.install(go),
-            Err(e) => Err(RenderError::InvalidOption(format!(
-                "cannot start {t} threads: {e}"
-            ))),
+            Err(e) => {
+                Err(RenderError::InvalidOption(format!("cannot start {t} threads: {e}")).into())
+            }
         },
         None => go(),
     }
 }
+
+/// What `render_scene` returns: `(image, variance or None, spp_done,
+/// interrupted)`.
+type RenderResult<'py> = (Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u32, bool);
 
 /// Render a Mitsuba 3 XML scene. Returns `(image, variance or None,
 /// spp_done, interrupted)`; the typed wrapper is `fgf.render`.
@@ -91,7 +97,7 @@ fn render_scene<'py>(
     defines: Option<Vec<(String, String)>>,
     progress: Option<Bound<'py, PyAny>>,
     return_variance: bool,
-) -> PyResult<(Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u32, bool)> {
+) -> PyResult<RenderResult<'py>> {
     check_spp_threads(spp, threads)?;
     let desc = load_scene(py, &scene, defines)?;
     let opts = RenderOptions {
@@ -106,14 +112,18 @@ fn render_scene<'py>(
     let job = run_job(py, total, "render", progress.as_ref(), |counter| {
         in_pool(threads, || fgf_render::render(&desc, &opts, counter))
     })?;
-    let interrupted = job.interrupted;
-    let out = job.value.map_err(|e| render_err(e, &source))?;
+    // A cancelled render still returns the image of the passes finished.
+    let (out, cancelled) = match job.value {
+        Ok(out) => (out, false),
+        Err(RenderError::Cancelled { partial }) => (*partial, true),
+        Err(e) => return Err(render_err(e, &source)),
+    };
     let img = to_hw3(py, out.image, out.height, out.width)?;
     let var = match out.variance {
         Some(v) => Some(to_hw3(py, v, out.height, out.width)?),
         None => None,
     };
-    Ok((img, var, out.spp_done, interrupted || out.interrupted))
+    Ok((img, var, out.spp_done, job.interrupted || cancelled))
 }
 
 fn image_data(img: &PyReadonlyArray3<'_, f32>) -> PyResult<(usize, usize, Vec<f32>)> {

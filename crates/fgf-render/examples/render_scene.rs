@@ -37,20 +37,19 @@ fn main() -> ExitCode {
             return ExitCode::from(1);
         }
     };
-    let opts = fgf_render::render::RenderOptions {
+    let opts = fgf_render::RenderOptions {
         spp,
         seed: Some(0),
         ..Default::default()
     };
     let t0 = std::time::Instant::now();
-    let out =
-        match pool.install(|| fgf_render::render::render(&scene, &opts, &fgf_core::NoProgress)) {
-            Ok(o) => o,
-            Err(e) => {
-                eprintln!("error: {e}");
-                return ExitCode::from(1);
-            }
-        };
+    let out = match pool.install(|| fgf_render::render(&scene, &opts, &fgf_core::NoProgress)) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: {e}");
+            return ExitCode::from(1);
+        }
+    };
     let t = t0.elapsed().as_secs_f64();
     let n = (out.width * out.height) as f64 * out.spp_done as f64;
     let mean = out.image.iter().map(|&v| v as f64).sum::<f64>() / out.image.len() as f64;

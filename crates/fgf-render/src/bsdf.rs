@@ -6,7 +6,7 @@
 //!
 //! | XML | parameters | notes |
 //! |---|---|---|
-//! | `diffuse` | `reflectance` (rgb in [0,1], default 0.5) | one-sided: black seen from the back |
+//! | `diffuse` | `reflectance` (rgb in \[0, 1\], default 0.5) | one-sided: black seen from the back |
 //! | `null` | — | index-matched boundary: the path passes straight through; it neither counts toward `max_depth` nor is lit |
 //! | `dielectric` | `int_ior` (inside, default 1.5046), `ext_ior` (default 1.000277), `specular_reflectance`, `specular_transmittance` (default 1) | smooth, both sides; transmitted radiance is scaled by `(η_i/η_t)²` (Mitsuba's non-symmetric transport in radiance mode) |
 //! | `conductor` | `material` or `eta`, `k`, `specular_reflectance` | smooth, complex Fresnel per channel; one-sided |
@@ -18,8 +18,9 @@
 //! </bsdf>
 //! ```
 
-use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Spectrum};
+use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::scene::desc::BsdfDesc;
+use crate::spectrum::Spectrum;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 
@@ -67,7 +68,7 @@ pub struct BsdfSample {
 
 impl Bsdf {
     pub fn from_desc(d: &BsdfDesc) -> Bsdf {
-        let c = crate::math::rgb;
+        let c = crate::spectrum::from_rgb;
         match d {
             BsdfDesc::Diffuse { reflectance } => Bsdf {
                 kind: BsdfKind::Diffuse {

@@ -4,8 +4,8 @@
 //! start on the near plane (`near_clip`, measured along the view axis) and
 //! end at `far_clip`.
 
-use crate::geometry::Ray;
-use crate::render::RenderError;
+use crate::error::RenderError;
+use crate::ray::Ray;
 use crate::scene::desc::{FovAxis, SensorDesc};
 use glam::{Affine3A, Vec3};
 

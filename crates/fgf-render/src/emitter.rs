@@ -18,8 +18,9 @@
 //! ```
 
 use crate::geometry::Geometry;
-use crate::math::{rgb, sample_uniform_sphere, Spectrum, UNIFORM_SPHERE_PDF};
+use crate::math::{sample_uniform_sphere, UNIFORM_SPHERE_PDF};
 use crate::scene::desc::EmitterDesc;
+use crate::spectrum::{from_rgb, Spectrum};
 use glam::{Mat3, Vec3};
 
 #[derive(Debug, Clone, Copy)]
@@ -68,14 +69,14 @@ impl Emitter {
         match d {
             EmitterDesc::Area { radiance } => Emitter::Area {
                 shape: shape.expect("area emitter on a shape"),
-                radiance: rgb(*radiance),
+                radiance: from_rgb(*radiance),
             },
             EmitterDesc::Point {
                 position,
                 intensity,
             } => Emitter::Point {
                 p: *position,
-                intensity: rgb(*intensity),
+                intensity: from_rgb(*intensity),
             },
             EmitterDesc::Spot {
                 to_world,
@@ -91,7 +92,7 @@ impl Emitter {
                 Emitter::Spot {
                     p: to_world.w_axis.truncate(),
                     to_local,
-                    intensity: rgb(*intensity),
+                    intensity: from_rgb(*intensity),
                     cutoff,
                     beam: beam_width.to_radians().min(cutoff),
                 }
@@ -101,10 +102,10 @@ impl Emitter {
                 irradiance,
             } => Emitter::Directional {
                 d: direction.normalize(),
-                irradiance: rgb(*irradiance),
+                irradiance: from_rgb(*irradiance),
             },
             EmitterDesc::Constant { radiance } => Emitter::Constant {
-                radiance: rgb(*radiance),
+                radiance: from_rgb(*radiance),
             },
         }
     }

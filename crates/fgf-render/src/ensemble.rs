@@ -1,4 +1,4 @@
-//! Ground truth from explicit realizations (issue 5): the ensemble average
+//! Ground truth from explicit realizations: the ensemble average
 //! of classical renders of random 3D media, to compare with the `fgf`
 //! model's render (`theory.md` §1, §3 "against explicit Gaussian
 //! realizations").
@@ -55,11 +55,12 @@
 //! println!("{:?}", out.media[0]);
 //! ```
 
+use crate::error::RenderError;
 use crate::math::mix64;
 use crate::medium::grid::GridTex;
-use crate::render::{render, RenderError, RenderOptions};
+use crate::render::{render, RenderOptions};
 use crate::scene::desc::{
-    GridFilter, GridVolumeDesc, MediumDesc, SceneDesc, TransmittanceDesc, VolumeDesc,
+    GridFilter, GridVolumeDesc, MediumDesc, Rgb, SceneDesc, TransmittanceDesc, VolumeDesc,
 };
 use fgf_core::transmittance::Fgf;
 use fgf_core::Progress;
@@ -135,8 +136,20 @@ pub struct EnsembleOutput {
     pub realizations_done: u32,
     pub realizations_requested: u32,
     pub spp: u32,
-    pub interrupted: bool,
     pub media: Vec<MediumReport>,
+}
+
+/// Errors of [`ensemble`]: the renderer's, and cancellation with the
+/// average of the realizations finished.
+#[derive(Debug, thiserror::Error)]
+pub enum EnsembleError {
+    #[error(transparent)]
+    Render(#[from] RenderError),
+    /// [`Progress::cancelled`] asked the ensemble to stop: `partial` holds
+    /// the realizations finished (possibly none; a realization being
+    /// rendered is dropped, it would not be one of the `N`).
+    #[error("interrupted after {} of {} realizations", .partial.realizations_done, .partial.realizations_requested)]
+    Cancelled { partial: Box<EnsembleOutput> },
 }
 
 /// Forwards cancellation but not the units of the field synthesis: the
@@ -153,7 +166,7 @@ impl Progress for CancelOnly<'_> {
 /// One `fgf` medium's synthesis plan.
 struct Plan {
     medium: usize,
-    sigma_t: [f32; 3],
+    sigma_t: Rgb,
     grey: bool,
     params: SynthParams,
     shape: [usize; 3],
@@ -188,10 +201,12 @@ fn plan(scene: &SceneDesc, opts: &EnsembleOptions) -> Result<Vec<Plan>, RenderEr
                 "medium {i}: a 'nonexponential' medium has no underlying random field to realise; the ensemble replaces 'fgf' media only"
             )));
         };
-        let sw3 = sw_3d_for_ray_statistics(hurst, sw).map_err(|e| {
-            RenderError::Unsupported(format!(
-                "medium {i}: {e} (white noise, hurst = -0.5, has no 3D field whose line averages are finite: render it as 'homogeneous' with sigma_eff instead)"
-            ))
+        let sw3 = sw_3d_for_ray_statistics(hurst, sw).map_err(|source| {
+            RenderError::UnsupportedParam {
+                medium: i,
+                source,
+                why: "white noise, hurst = -0.5, has no 3D field whose line averages are finite: render it as 'homogeneous' with sigma_eff instead",
+            }
         })?;
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
@@ -238,7 +253,7 @@ fn plan(scene: &SceneDesc, opts: &EnsembleOptions) -> Result<Vec<Plan>, RenderEr
             (sigma_t.iter().map(|&s| s as f64).sum::<f64>() / 3.0).max(f64::MIN_POSITIVE);
         let segment = ((1.0 / sigma_mean / dx).round() as usize).clamp(1, n[0]);
         let model = Fgf::new(sigma_mean, hurst, sw, length)
-            .map_err(|e| RenderError::InvalidScene(format!("medium {i}: {e}")))?;
+            .map_err(|source| RenderError::Param { medium: i, source })?;
         plans.push(Plan {
             medium: i,
             sigma_t: *sigma_t,
@@ -262,27 +277,29 @@ fn plan(scene: &SceneDesc, opts: &EnsembleOptions) -> Result<Vec<Plan>, RenderEr
 
 /// Render the ensemble average; see the module docs. Progress is counted in
 /// rendered samples ([`total_samples`]); on cancellation the realizations
-/// finished so far are returned with `interrupted = true`.
+/// finished so far come with [`EnsembleError::Cancelled`].
 pub fn ensemble(
     scene: &SceneDesc,
     opts: &EnsembleOptions,
     progress: &dyn Progress,
-) -> Result<EnsembleOutput, RenderError> {
+) -> Result<EnsembleOutput, EnsembleError> {
     if opts.realizations == 0 {
         return Err(RenderError::InvalidOption(
             "realizations = 0; need at least 1 (2 for a standard error)".into(),
-        ));
+        )
+        .into());
     }
     if opts.resolution < 2 {
         return Err(RenderError::InvalidOption(format!(
             "resolution = {}; need at least 2 voxels along the longest side",
             opts.resolution
-        )));
+        ))
+        .into());
     }
     if opts.spp == Some(0) {
-        return Err(RenderError::InvalidOption(
-            "spp = 0; need at least 1 sample per pixel".into(),
-        ));
+        return Err(
+            RenderError::InvalidOption("spp = 0; need at least 1 sample per pixel".into()).into(),
+        );
     }
     let plans = plan(scene, opts)?;
     let (w, h) = (scene.sensor.width as usize, scene.sensor.height as usize);
@@ -312,11 +329,12 @@ pub fn ensemble(
                     cancelled = true;
                     break;
                 }
-                Err(e) => {
-                    return Err(RenderError::InvalidOption(format!(
-                        "medium {}: field synthesis: {e}",
-                        p.medium
-                    )))
+                Err(source) => {
+                    return Err(RenderError::Field {
+                        medium: p.medium,
+                        source,
+                    }
+                    .into())
                 }
             };
             let u = field.data.to_f32();
@@ -326,7 +344,10 @@ pub fn ensemble(
                 2,
                 &[p.segment],
             )
-            .map_err(|e| RenderError::InvalidOption(format!("medium {}: {e}", p.medium)))?;
+            .map_err(|e| RenderError::Field {
+                medium: p.medium,
+                source: e.into(),
+            })?;
             var_sum[k] += lv[0];
             let channels = if p.grey { 1 } else { 3 };
             let mut data = Vec::with_capacity(u.len() * channels);
@@ -384,13 +405,16 @@ pub fn ensemble(
             variance: false,
             spp_per_pass: None,
         };
-        let out = render(&sc, &ropts, progress)?;
-        if out.interrupted {
+        let out = match render(&sc, &ropts, progress) {
+            Ok(out) => out,
             // A partial realization would bias nothing but is not one of the
             // N: drop it.
-            interrupted = true;
-            break;
-        }
+            Err(RenderError::Cancelled { .. }) => {
+                interrupted = true;
+                break;
+            }
+            Err(e) => return Err(e.into()),
+        };
         spp_done = out.spp_done;
         for (j, &v) in out.image.iter().enumerate() {
             let v = v as f64;
@@ -442,7 +466,7 @@ pub fn ensemble(
             continuum_variance: p.continuum_variance,
         })
         .collect();
-    Ok(EnsembleOutput {
+    let out = EnsembleOutput {
         width: w,
         height: h,
         mean,
@@ -450,9 +474,15 @@ pub fn ensemble(
         realizations_done: done,
         realizations_requested: opts.realizations,
         spp: spp_done,
-        interrupted,
         media,
-    })
+    };
+    if interrupted {
+        Err(EnsembleError::Cancelled {
+            partial: Box::new(out),
+        })
+    } else {
+        Ok(out)
+    }
 }
 
 #[cfg(test)]

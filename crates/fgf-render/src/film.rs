@@ -1,4 +1,6 @@
-//! Pixel reconstruction by filter importance sampling: each camera sample of
+//! The film: pixel reconstruction and the image the render returns.
+//!
+//! Pixel reconstruction is by filter importance sampling: each camera sample of
 //! pixel `(x, y)` is placed at `(x + 0.5 + δx, y + 0.5 + δy)` with `δ` drawn
 //! from the (separable) reconstruction filter, and all samples have weight
 //! 1, so a pixel is the plain mean of its samples and its variance is the
@@ -15,9 +17,13 @@
 //!   (default `σ = 0.5`); sampled from a 1024-bin tabulated CDF with a
 //!   weight `f/pdf` relative to the normalised filter, so the tabulation does
 //!   not bias the result.
+//!
+//! Each pixel keeps running sums of its samples ([`Accum`]), from which
+//! [`RenderOutput`] takes the pixel means and, if asked, their variances.
 
 use crate::math::Sampler;
 use crate::scene::desc::FilterDesc;
+use crate::spectrum::Spectrum;
 
 const GAUSS_BINS: usize = 1024;
 
@@ -127,6 +133,83 @@ impl Filter {
         let (x, wx) = axis(s, px, width);
         let (y, wy) = axis(s, py, height);
         (x, y, wx * wy)
+    }
+}
+
+/// Per-pixel running sums (f64 so that millions of samples add exactly enough).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Accum {
+    sum: [f64; 3],
+    sum_sq: [f64; 3],
+}
+
+impl Accum {
+    /// Add one sample; its square too if `variance`.
+    #[inline]
+    pub fn add(&mut self, l: Spectrum, variance: bool) {
+        for c in 0..3 {
+            let v = l[c] as f64;
+            self.sum[c] += v;
+            if variance {
+                self.sum_sq[c] += v * v;
+            }
+        }
+    }
+}
+
+/// A rendered image: row-major from the top-left, RGB interleaved.
+#[derive(Debug, Clone)]
+pub struct RenderOutput {
+    pub width: usize,
+    pub height: usize,
+    /// `height·width·3` linear radiance values (the pixel means).
+    pub image: Vec<f32>,
+    /// Variance of each pixel mean (sample variance / n), if asked for.
+    pub variance: Option<Vec<f32>>,
+    /// Samples per pixel in the image (less than asked if cancelled).
+    pub spp_done: u32,
+    pub spp_requested: u32,
+}
+
+impl RenderOutput {
+    /// The image of `acc` (`width·height` pixels of `done` samples each),
+    /// with the variances of the pixel means if `variance`.
+    pub fn from_sums(
+        acc: &[Accum],
+        width: usize,
+        height: usize,
+        done: u32,
+        spp_requested: u32,
+        variance: bool,
+    ) -> RenderOutput {
+        let nf = done.max(1) as f64;
+        let image: Vec<f32> = acc
+            .iter()
+            .flat_map(|a| a.sum.map(|s| (s / nf) as f32))
+            .collect();
+        let variance = variance.then(|| {
+            acc.iter()
+                .flat_map(|a| {
+                    [0, 1, 2].map(|c| {
+                        if done < 2 {
+                            return f32::NAN;
+                        }
+                        let m = a.sum[c] / nf;
+                        // Unbiased sample variance, divided by n for the mean.
+                        let var = ((a.sum_sq[c] - nf * m * m) / (nf - 1.0)).max(0.0);
+                        (var / nf) as f32
+                    })
+                })
+                .collect()
+        });
+        RenderOutput {
+            width,
+            height,
+            image,
+            variance,
+            spp_done: done,
+            spp_requested,
+        }
     }
 }
 

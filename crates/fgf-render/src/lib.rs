@@ -8,24 +8,37 @@
 //!   produces it; the renderer consumes it. It is the only contract between
 //!   the two halves.
 //! * [`scene::xml`]: the Mitsuba 3 XML loader.
-//! * [`render`](mod@render): the renderer's entry point, from a `SceneDesc` to pixels;
-//!   [`integrator`] (volumetric path tracing), [`medium`] (the medium
-//!   interface, homogeneous and grid media), [`geometry`] (shapes, BVH),
-//!   [`bsdf`], [`emitter`], [`phase`], [`camera`], [`film`], [`math`].
+//! * [`render`](mod@render): the renderer's entry point, from a `SceneDesc` to
+//!   pixels ([`film`] holds the image it returns), [`error`] its error;
+//!   [`world`] (the scene compiled for rendering), [`integrator`]
+//!   (volumetric path tracing), [`medium`] (the medium interface,
+//!   homogeneous, grid and non-exponential media), [`geometry`] (shapes,
+//!   BVH), [`ray`], [`bsdf`], [`emitter`], [`phase`], [`camera`],
+//!   [`spectrum`] (the colour type), [`math`].
+//! * [`ensemble`]: ground truth from explicit realizations of `fgf` media.
+
+// `!(x > 0.0)` is used on purpose: it is true for NaN, which must take the
+// degenerate branch (as in fgf-core); `partial_cmp` would only obscure that.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod scene;
 
 pub mod bsdf;
 pub mod camera;
 pub mod emitter;
-/// Ground truth from explicit realizations of `fgf` media (issue 5).
 pub mod ensemble;
+pub mod error;
 pub mod film;
 pub mod geometry;
 pub mod integrator;
 pub mod math;
 pub mod medium;
 pub mod phase;
+pub mod ray;
 pub mod render;
+pub mod spectrum;
+pub mod world;
 
-pub use render::{render, RenderError, RenderOptions, RenderOutput};
+pub use error::RenderError;
+pub use film::RenderOutput;
+pub use render::{render, RenderOptions};

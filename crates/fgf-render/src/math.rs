@@ -1,5 +1,5 @@
-//! Small numerical helpers shared by the renderer: RGB spectra, orthonormal
-//! frames, the per-sample random stream and the warping functions.
+//! Small numerical helpers shared by the renderer: orthonormal frames, the
+//! per-sample random stream, the warping functions and the MIS heuristic.
 //!
 //! Sampling routines take their uniform variates `u ∈ [0,1)` as arguments
 //! and come with their pdf (pbrt-v4's habit), so they can be tested alone.
@@ -8,27 +8,6 @@ use glam::Vec3;
 use rand::RngCore;
 use rand_pcg::Pcg32;
 use std::f32::consts::PI;
-
-/// Linear RGB radiance/throughput; component-wise arithmetic.
-pub type Spectrum = Vec3;
-
-/// `[f32; 3]` (the scene description's colour) to [`Spectrum`].
-#[inline]
-pub fn rgb(c: [f32; 3]) -> Spectrum {
-    Vec3::from_array(c)
-}
-
-/// Largest component (Russian roulette, majorants).
-#[inline]
-pub fn max_comp(s: Spectrum) -> f32 {
-    s.x.max(s.y).max(s.z)
-}
-
-/// Mean of the three channels (the one-sample spectral MIS mixture).
-#[inline]
-pub fn mean(s: Spectrum) -> f32 {
-    (s.x + s.y + s.z) * (1.0 / 3.0)
-}
 
 /// SplitMix64 finaliser: a bijective 64-bit mixer used to derive stream seeds.
 #[inline]

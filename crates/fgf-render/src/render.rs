@@ -3,8 +3,9 @@
 //! * Samples are taken in *passes*: each pass adds the same number of
 //!   samples to every pixel, over rows rendered in parallel by rayon. Between
 //!   passes the job checks [`Progress::cancelled`]; on cancellation it returns
-//!   the image of the passes completed, with the number of samples per pixel
-//!   it holds (`spp_done`, equal for all pixels).
+//!   [`RenderError::Cancelled`] with the image of the passes completed and
+//!   the number of samples per pixel it holds (`spp_done`, equal for all
+//!   pixels).
 //! * Sample `k` of pixel `i` uses a random stream derived from
 //!   `(seed, i, k)` only and each pixel accumulates its samples in order, so
 //!   the image is bit-identical for any number of threads.
@@ -17,24 +18,13 @@
 //! fgf_io::image::write_exr("out.exr".as_ref(), out.width, out.height, 3, &out.image).unwrap();
 //! ```
 
-use crate::film::Filter;
-use crate::integrator::World;
+use crate::error::RenderError;
+use crate::film::{Accum, Filter, RenderOutput};
 use crate::math::Sampler;
 use crate::scene::desc::SceneDesc;
+use crate::world::World;
 use fgf_core::Progress;
 use rayon::prelude::*;
-
-/// Errors of the renderer (scene errors found when compiling the scene, and
-/// features outside the supported subset).
-#[derive(Debug, thiserror::Error)]
-pub enum RenderError {
-    #[error("invalid scene: {0}")]
-    InvalidScene(String),
-    #[error("not supported: {0}")]
-    Unsupported(String),
-    #[error("invalid render option: {0}")]
-    InvalidOption(String),
-}
 
 /// Overrides of the scene's sampler settings.
 #[derive(Debug, Clone, Default)]
@@ -49,28 +39,6 @@ pub struct RenderOptions {
     /// 2¹⁸ samples; it does not change the image, only how often
     /// cancellation is checked).
     pub spp_per_pass: Option<u32>,
-}
-
-/// A rendered image: row-major from the top-left, RGB interleaved.
-#[derive(Debug, Clone)]
-pub struct RenderOutput {
-    pub width: usize,
-    pub height: usize,
-    /// `height·width·3` linear radiance values (the pixel means).
-    pub image: Vec<f32>,
-    /// Variance of each pixel mean (sample variance / n), if asked for.
-    pub variance: Option<Vec<f32>>,
-    /// Samples per pixel in the image (less than asked if cancelled).
-    pub spp_done: u32,
-    pub spp_requested: u32,
-    pub interrupted: bool,
-}
-
-/// Per-pixel running sums (f64 so that millions of samples add exactly enough).
-#[derive(Clone, Copy, Default)]
-struct Accum {
-    sum: [f64; 3],
-    sum_sq: [f64; 3],
 }
 
 /// Render `scene`; see the module docs.
@@ -96,11 +64,12 @@ pub fn render(
     let mut acc = vec![Accum::default(); w * h];
     let mut done = 0u32;
     let seed_key = Sampler::seed_key(seed);
-    let mut interrupted = false;
     while done < spp {
         if progress.cancelled() {
-            interrupted = true;
-            break;
+            let partial = RenderOutput::from_sums(&acc, w, h, done, spp, opts.variance);
+            return Err(RenderError::Cancelled {
+                partial: Box::new(partial),
+            });
         }
         let n = per_pass.min(spp - done);
         let first = done;
@@ -116,48 +85,21 @@ pub fn render(
                     // A NaN or infinite sample (a numerical failure, e.g. a
                     // zero pdf) would poison the pixel forever: drop it to 0.
                     if !l.is_finite() {
-                        l = crate::math::Spectrum::ZERO;
+                        l = crate::spectrum::Spectrum::ZERO;
                     }
-                    for c in 0..3 {
-                        let v = l[c] as f64;
-                        a.sum[c] += v;
-                        if opts.variance {
-                            a.sum_sq[c] += v * v;
-                        }
-                    }
+                    a.add(l, opts.variance);
                 }
             }
             progress.inc((w as u64) * n as u64);
         });
         done += n;
     }
-    let nf = done.max(1) as f64;
-    let image: Vec<f32> = acc
-        .iter()
-        .flat_map(|a| a.sum.map(|s| (s / nf) as f32))
-        .collect();
-    let variance = opts.variance.then(|| {
-        acc.iter()
-            .flat_map(|a| {
-                [0, 1, 2].map(|c| {
-                    if done < 2 {
-                        return f32::NAN;
-                    }
-                    let m = a.sum[c] / nf;
-                    // Unbiased sample variance, divided by n for the mean.
-                    let var = ((a.sum_sq[c] - nf * m * m) / (nf - 1.0)).max(0.0);
-                    (var / nf) as f32
-                })
-            })
-            .collect()
-    });
-    Ok(RenderOutput {
-        width: w,
-        height: h,
-        image,
-        variance,
-        spp_done: done,
-        spp_requested: spp,
-        interrupted,
-    })
+    Ok(RenderOutput::from_sums(
+        &acc,
+        w,
+        h,
+        done,
+        spp,
+        opts.variance,
+    ))
 }

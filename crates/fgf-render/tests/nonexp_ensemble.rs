@@ -2,39 +2,28 @@
 //! placement, the limit `S_w → 0` (the realizations become the homogeneous
 //! medium), and clear errors for what it cannot realise.
 
-use fgf_render::ensemble::{ensemble, EnsembleOptions};
-use fgf_render::render::{render, RenderError, RenderOptions};
-use fgf_render::scene::desc::SceneDesc;
+mod common;
 
+use common::{cube_on_ground, medium_xml, WHITE_SKY};
+use fgf_render::ensemble::{ensemble, EnsembleError, EnsembleOptions};
+use fgf_render::scene::desc::SceneDesc;
+use fgf_render::{render, RenderError, RenderOptions};
+
+/// The reference cube (scaled by `scale`) holding `medium`, under a white
+/// sky, on a 16² film with 8 samples per pixel.
 fn scene(medium: &str, scale: &str) -> SceneDesc {
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="volpath"><integer name="max_depth" value="8"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="40.0"/>
-        <transform name="to_world"><lookat origin="0.0, 1.6, 4.0" target="0.0, 0.6, 0.0" up="0.0, 1.0, 0.0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="16"/><rfilter type="box"/></film>
-    </sensor>
-    <shape type="cube">
-        <transform name="to_world"><scale {scale}/><translate value="0.0, 0.75, 0.0"/></transform>
-        <bsdf type="null"/>
-        {medium}
-    </shape>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="4.0"/><rotate x="1" angle="-90"/></transform>
-        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
-    </shape>
-    <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
-</scene>"#
-    );
-    fgf_render::scene::xml::load_str(&xml, "ens.xml", std::path::Path::new("."), &[])
-        .unwrap_or_else(|e| panic!("{e}"))
+    cube_on_ground(medium, scale, WHITE_SKY, 8, 16, 8)
 }
 
 fn fgf_medium(hurst: f64, sw: f64) -> String {
-    format!(
-        r#"<medium type="fgf" name="interior"><float name="sigma_t" value="4"/><rgb name="albedo" value="0.8"/><float name="hurst" value="{hurst}"/><float name="sw" value="{sw}"/></medium>"#
+    let params = format!(r#"<float name="hurst" value="{hurst}"/><float name="sw" value="{sw}"/>"#);
+    medium_xml(
+        "fgf",
+        &params,
+        "4",
+        "0.8",
+        "energy_conserving",
+        r#"name="interior""#,
     )
 }
 
@@ -119,7 +108,8 @@ fn what_cannot_be_realised_is_a_clear_error() {
     );
     let e = ensemble(&davis, &opts, &fgf_core::NoProgress).unwrap_err();
     assert!(
-        matches!(e, RenderError::Unsupported(_)) && e.to_string().contains("nonexponential"),
+        matches!(e, EnsembleError::Render(RenderError::Unsupported(_)))
+            && e.to_string().contains("nonexponential"),
         "{e}"
     );
     let white = scene(&fgf_medium(-0.5, 1.0), r#"value="0.5""#);
@@ -137,6 +127,6 @@ fn what_cannot_be_realised_is_a_clear_error() {
     };
     assert!(matches!(
         ensemble(&white, &zero, &fgf_core::NoProgress),
-        Err(RenderError::InvalidOption(_))
+        Err(EnsembleError::Render(RenderError::InvalidOption(_)))
     ));
 }

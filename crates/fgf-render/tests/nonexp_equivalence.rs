@@ -7,40 +7,16 @@
 //! sample; the tests allow that rounding and nothing more. And `S_w → 0`
 //! converges to the classical `homogeneous` render.
 
-use fgf_core::transmittance::Fgf;
-use fgf_render::render::{render, RenderOptions, RenderOutput};
-use fgf_render::scene::desc::SceneDesc;
+mod common;
 
-/// The reference cube scene (`../shared/scenes/cube-homogeneous.xml`),
-/// small: a medium cube over a diffuse ground, lit from the side.
+use common::{cube_on_ground, medium_xml, SIDE_LIGHT};
+use fgf_core::transmittance::Fgf;
+use fgf_render::scene::desc::SceneDesc;
+use fgf_render::{render, RenderOptions, RenderOutput};
+
+/// The reference cube scene in small (a 24² film, 16 samples per pixel).
 fn scene(medium: &str) -> SceneDesc {
-    let xml = format!(
-        r#"<scene version="3.0.0">
-    <integrator type="volpath"><integer name="max_depth" value="16"/></integrator>
-    <sensor type="perspective">
-        <float name="fov" value="40.0"/>
-        <transform name="to_world"><lookat origin="0.0, 1.6, 4.0" target="0.0, 0.6, 0.0" up="0.0, 1.0, 0.0"/></transform>
-        <sampler type="independent"><integer name="sample_count" value="16"/></sampler>
-        <film type="hdrfilm"><integer name="width" value="24"/><integer name="height" value="24"/><rfilter type="box"/></film>
-    </sensor>
-    <shape type="cube">
-        <transform name="to_world"><scale value="0.5"/><translate value="0.0, 0.75, 0.0"/></transform>
-        <bsdf type="null"/>
-        {medium}
-    </shape>
-    <shape type="rectangle">
-        <transform name="to_world"><scale value="4.0"/><rotate x="1" angle="-90"/></transform>
-        <bsdf type="diffuse"><rgb name="reflectance" value="0.5"/></bsdf>
-    </shape>
-    <shape type="rectangle">
-        <transform name="to_world"><matrix value="-0.0490290338 0.107919143 0.880450906 -2.5 0 0.224471818 -0.440225453 2 -0.245145169 -0.0215838286 -0.176090181 0.5 0 0 0 1"/></transform>
-        <bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf>
-        <emitter type="area"><rgb name="radiance" value="150.0"/></emitter>
-    </shape>
-</scene>"#
-    );
-    fgf_render::scene::xml::load_str(&xml, "cube.xml", std::path::Path::new("."), &[])
-        .unwrap_or_else(|e| panic!("{e}"))
+    cube_on_ground(medium, r#"value="0.5""#, SIDE_LIGHT, 16, 24, 16)
 }
 
 fn run(medium: &str) -> RenderOutput {
@@ -53,9 +29,7 @@ fn run(medium: &str) -> RenderOutput {
 }
 
 fn medium(ty: &str, sigma_t: &str, kernel: &str, params: &str) -> String {
-    format!(
-        r#"<medium type="{ty}" name="interior"><rgb name="sigma_t" value="{sigma_t}"/><rgb name="albedo" value="0.8"/><string name="kernel" value="{kernel}"/>{params}</medium>"#
-    )
+    medium_xml(ty, params, sigma_t, "0.8", kernel, r#"name="interior""#)
 }
 
 /// Pixel-for-pixel agreement: at least 97% of the values agree to 1e-3

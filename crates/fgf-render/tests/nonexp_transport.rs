@@ -1,4 +1,4 @@
-//! Transport tests of the non-exponential media (`theory.md` §3–4, issue 5):
+//! Transport tests of the non-exponential media (`theory.md` §3–4):
 //! furnace, uncollided slab, free-flight distributions (KS), single
 //! scattering against quadrature, segment restarts at null boundaries,
 //! macro density, reciprocity.
@@ -17,12 +17,16 @@
 //! values of deep furnace paths heavy-tailed (the throughput grows as
 //! 0.95^-n), and the estimated standard errors unreliable.
 
+mod common;
+
+use common::{assert_close, load_xml, medium_xml};
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
-use fgf_render::geometry::Ray;
-use fgf_render::integrator::World;
-use fgf_render::math::{sample_uniform_sphere, Sampler, Spectrum};
+use fgf_render::math::{sample_uniform_sphere, Sampler};
 use fgf_render::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
+use fgf_render::ray::Ray;
 use fgf_render::scene::desc::{MediumDesc, SceneDesc};
+use fgf_render::spectrum::Spectrum;
+use fgf_render::world::World;
 use glam::Vec3;
 
 const Z: f64 = 4.5;
@@ -69,29 +73,14 @@ fn models() -> Vec<(&'static str, &'static str, &'static str)> {
     ]
 }
 
-fn medium_xml(
-    ty: &str,
-    body: &str,
-    sigma_t: &str,
-    albedo: &str,
-    kernel: &str,
-    name_or_id: &str,
-) -> String {
-    format!(
-        r#"<medium type="{ty}" {name_or_id}>{body}<rgb name="sigma_t" value="{sigma_t}"/><rgb name="albedo" value="{albedo}"/><string name="kernel" value="{kernel}"/></medium>"#
-    )
-}
-
 fn scene(body: &str) -> SceneDesc {
-    let xml = format!(
+    load_xml(&format!(
         r#"<scene version="3.0.0">
         <integrator type="volpath"><integer name="max_depth" value="-1"/><integer name="rr_depth" value="100000"/></integrator>
         <sensor type="perspective"><film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film></sensor>
         {body}
         </scene>"#
-    );
-    fgf_render::scene::xml::load_str(&xml, "test.xml", std::path::Path::new("."), &[])
-        .unwrap_or_else(|e| panic!("{e}\n{xml}"))
+    ))
 }
 
 /// Mean and standard error of `n` samples of `f`, per channel.
@@ -114,20 +103,6 @@ fn estimate(
     let se = [0, 1, 2]
         .map(|c| (((s2[c] / nf - mean[c] * mean[c]) * nf / (nf - 1.0)).max(0.0) / nf).sqrt());
     (mean, se)
-}
-
-fn assert_close(label: &str, mean: [f64; 3], se: [f64; 3], expected: [f64; 3]) {
-    for c in 0..3 {
-        // A zero SE (every sample equal) needs an exact match up to f32 rounding.
-        let tol = Z * se[c] + 1e-5 * expected[c].abs().max(1e-3);
-        assert!(
-            (mean[c] - expected[c]).abs() <= tol,
-            "{label} channel {c}: {} vs expected {} (SE {})",
-            mean[c],
-            expected[c],
-            se[c]
-        );
-    }
 }
 
 /// The model a scene medium uses in channel `c` (for analytic targets).
@@ -171,6 +146,7 @@ fn furnace_returns_the_environment_radiance() {
                     mean,
                     se,
                     [1.0; 3],
+                    Z,
                 );
             }
         }
@@ -224,6 +200,7 @@ fn slab_uncollided_transmission_is_t_ss() {
                     mean,
                     se,
                     expected,
+                    Z,
                 );
             }
         }
@@ -276,6 +253,7 @@ fn free_flights_follow_the_kernel() {
                     mean,
                     se,
                     expected,
+                    Z,
                 );
                 let mut s = Sampler::new(0, 0, 0);
                 let tr = med.transmittance(&ray, t_max, start, SegmentEnd::Surface, &mut s);
@@ -405,6 +383,7 @@ fn single_scattering_slab_matches_quadrature() {
                 mean,
                 se,
                 [expected; 3],
+                Z,
             );
         }
     }
@@ -478,6 +457,7 @@ fn macro_density_uses_the_exact_optical_path() {
             mean,
             se,
             [expected; 3],
+            Z,
         );
     }
 }
@@ -528,7 +508,7 @@ fn reciprocal_kernel_is_reciprocal() {
                     let n = sample_uniform_sphere(s.next_2d());
                     let d = fgf_render::math::Frame::from_normal(n)
                         .to_world(fgf_render::math::sample_cosine_hemisphere(s.next_2d()));
-                    let o = fgf_render::geometry::offset_point(probe + n * r, n, d);
+                    let o = fgf_render::ray::offset_point(probe + n * r, n, d);
                     world.li(Ray { o, d }, f32::INFINITY, s)
                 })
             };
@@ -638,6 +618,7 @@ fn furnace_with_a_macro_density() {
                 mean,
                 se,
                 [1.0; 3],
+                Z,
             );
         }
     }

@@ -11,10 +11,13 @@
 //! error rate is below 23 × 6.3e-5 ≈ 1.5e-3 (Bonferroni). Seeds are fixed,
 //! so a pass is reproducible.
 
+mod common;
+
+use common::{assert_close, reference_scene};
 use fgf_core::{NoProgress, Progress};
 use fgf_io::vol::VolGrid;
 use fgf_render::scene::desc::*;
-use fgf_render::{render, RenderOptions};
+use fgf_render::{render, RenderError, RenderOptions};
 use glam::{Mat4, Vec3};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -82,9 +85,11 @@ fn cube(to_world: Mat4, interior: Option<MediumId>) -> ShapeDesc {
     }
 }
 
-/// Mean over all pixels per channel and its standard error (pixels are
-/// independent, so the variances of the pixel means add).
-fn image_mean(out: &fgf_render::RenderOutput) -> ([f64; 3], [f64; 3]) {
+/// Render `s` and return the mean over all pixels per channel and its
+/// standard error (pixels are independent, so the variances of the pixel
+/// means add).
+fn image_mean(s: &SceneDesc) -> ([f64; 3], [f64; 3]) {
+    let out = render(s, &opts(), &NoProgress).unwrap();
     let n = (out.width * out.height) as f64;
     let var = out.variance.as_ref().expect("variance requested");
     let mut m = [0.0; 3];
@@ -110,20 +115,6 @@ fn image_mean(out: &fgf_render::RenderOutput) -> ([f64; 3], [f64; 3]) {
     (m, se)
 }
 
-fn assert_close(what: &str, got: [f64; 3], se: [f64; 3], expected: [f64; 3]) {
-    for c in 0..3 {
-        let err = (got[c] - expected[c]).abs();
-        assert!(
-            err <= Z * se[c] && se[c] > 0.0 || (se[c] == 0.0 && err < 1e-5),
-            "{what}, channel {c}: {} vs expected {} (SE {}, z = {:.2})",
-            got[c],
-            expected[c],
-            se[c],
-            err / se[c]
-        );
-    }
-}
-
 fn opts() -> RenderOptions {
     RenderOptions {
         variance: true,
@@ -133,6 +124,14 @@ fn opts() -> RenderOptions {
 
 fn constant_env(s: &mut SceneDesc, l: f32) {
     s.emitters.push(EmitterDesc::Constant { radiance: [l; 3] });
+}
+
+/// A furnace: under a `constant` environment of radiance `l` the image
+/// mean of `s` (whose media have albedo 1) is `l`.
+fn assert_furnace(label: &str, s: &mut SceneDesc, l: f32) {
+    constant_env(s, l);
+    let (m, se) = image_mean(s);
+    assert_close(label, m, se, [l as f64; 3], Z);
 }
 
 fn random_grid(res: usize, seed: u64, max: f32) -> Arc<VolGrid> {
@@ -168,10 +167,7 @@ fn furnace_homogeneous_returns_environment_radiance() {
         phase: PhaseDesc::Hg { g: 0.4 },
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
-    constant_env(&mut s, 0.7);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    assert_close("homogeneous furnace", m, se, [0.7; 3]);
+    assert_furnace("homogeneous furnace", &mut s, 0.7);
 }
 
 /// The same with the camera inside the medium (the sensor's medium).
@@ -193,10 +189,7 @@ fn furnace_with_camera_inside_medium() {
         phase: PhaseDesc::Isotropic,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
-    constant_env(&mut s, 1.3);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    assert_close("furnace, camera inside", m, se, [1.3; 3]);
+    assert_furnace("furnace, camera inside", &mut s, 1.3);
 }
 
 /// Albedo-1 grid medium with a high-contrast random density (delta tracking
@@ -222,10 +215,7 @@ fn furnace_heterogeneous_returns_environment_radiance() {
         phase: PhaseDesc::Isotropic,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
-    constant_env(&mut s, 0.9);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
-    assert_close("heterogeneous furnace", m, se, [0.9; 3]);
+    assert_furnace("heterogeneous furnace", &mut s, 0.9);
 }
 
 /// A purely absorbing slab of thickness `d` (z ∈ [0, d]) in front of a
@@ -243,10 +233,9 @@ fn slab_transmittance(medium: MediumDesc, sigma_t: [f64; 3]) {
         * Mat4::from_scale(Vec3::new(10.0, 10.0, d / 2.0));
     s.shapes.push(cube(slab, Some(0)));
     constant_env(&mut s, 2.0);
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
+    let (m, se) = image_mean(&s);
     let expected = sigma_t.map(|st| 2.0 * (-st * d as f64).exp());
-    assert_close("slab transmittance", m, se, expected);
+    assert_close("slab transmittance", m, se, expected, Z);
 }
 
 #[test]
@@ -332,8 +321,7 @@ fn thin_slab_single_scattering(absorbers: usize) {
         direction: light_dir,
         irradiance: [e as f32; 3],
     });
-    let out = render(&s, &opts(), &NoProgress).unwrap();
-    let (m, se) = image_mean(&out);
+    let (m, se) = image_mean(&s);
     let mu_l = 0.8f64;
     // Propagation -z against the direction toward the light, -light_dir.
     let cos = Vec3::new(0.0, 0.0, -1.0).dot(-light_dir) as f64;
@@ -349,7 +337,7 @@ fn thin_slab_single_scattering(absorbers: usize) {
     let tau = absorbers as f64 * sigma_abs * h_abs;
     let expected = (-tau).exp() * (-tau / mu_l).exp() * l;
     let what = format!("single scattering under {absorbers} absorbers");
-    assert_close(&what, m, se, [expected; 3]);
+    assert_close(&what, m, se, [expected; 3], Z);
 }
 
 #[test]
@@ -395,17 +383,6 @@ fn max_depth_one_shows_only_direct_emission() {
     assert!(out.image.iter().all(|&v| v > 0.0));
 }
 
-fn reference_scene(name: &str, res: u32, spp: u32) -> SceneDesc {
-    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes")
-        .join(name);
-    let defines = [
-        ("res".to_string(), res.to_string()),
-        ("spp".to_string(), spp.to_string()),
-    ];
-    fgf_render::scene::load_file(&path, &defines).unwrap_or_else(|e| panic!("{e}"))
-}
-
 /// Bit-identical images for 1 and 2 threads.
 #[test]
 fn one_and_two_threads_give_identical_images() {
@@ -445,8 +422,9 @@ fn cancellation_returns_completed_passes() {
         ..Default::default()
     };
     let p = CancelAfterFirstPass(AtomicU64::new(0));
-    let out = render(&s, &o, &p).unwrap();
-    assert!(out.interrupted);
+    let Err(RenderError::Cancelled { partial: out }) = render(&s, &o, &p) else {
+        panic!("a cancelled render must return RenderError::Cancelled");
+    };
     assert_eq!(out.spp_done, 2);
     let full = render(&s, &RenderOptions { spp: Some(2), ..o }, &NoProgress).unwrap();
     assert_eq!(out.image, full.image);
@@ -458,9 +436,9 @@ fn cancellation_returns_completed_passes() {
 /// shadow-ray offsets: a light must not shadow itself at grazing angles.
 #[test]
 fn disk_light_on_ground_matches_quadrature() {
-    use fgf_render::geometry::Ray;
-    use fgf_render::integrator::World;
     use fgf_render::math::Sampler;
+    use fgf_render::ray::Ray;
+    use fgf_render::world::World;
     let ground = ShapeDesc {
         name: "ground".into(),
         geometry: GeometryDesc::Rectangle,

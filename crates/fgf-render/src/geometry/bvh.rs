@@ -7,7 +7,7 @@
 //! We wrote our own rather than depend on a crate: it is a few hundred
 //! lines without unsafe code, its leaves mix triangles with analytic spheres
 //! and disks, and it tests leaf triangles 4 at a time (`TriPack` in
-//! `geometry/mod.rs`), which is what matters for scenes of a handful of
+//! `geometry/pack.rs`), which is what matters for scenes of a handful of
 //! primitives like the reference ones. On the homogeneous reference scene,
 //! SIMD slab tests and 4-wide leaf packs made the whole renderer 15 % faster
 //! than per-triangle tests; counting a node visit as 2 pack tests in the SAH
@@ -88,17 +88,17 @@ struct Node {
     axis: u8,
 }
 
-/// The hierarchy; `order` lists primitive indices in leaf order.
+/// The hierarchy. Its leaves are ranges of the primitive order that
+/// [`Bvh::build`] returns.
 #[derive(Debug, Clone)]
 pub struct Bvh {
     nodes: Vec<Node>,
-    pub order: Vec<u32>,
 }
 
 const BINS: usize = 12;
 /// Leaves are tested in SIMD packs of 4 primitives; a leaf holds at most
 /// `MAX_LEAF` (4 packs) and the SAH counts cost in packs, not primitives.
-const PACK: usize = 4;
+pub const PACK: usize = 4;
 const MAX_LEAF: usize = 16;
 /// Cost of visiting a node (slab test, stack, branch) relative to one 4-wide
 /// pack test. Measured, not derived: 2 made renders faster than 0.5 or 1 both
@@ -112,15 +112,44 @@ fn packs(n: usize) -> f32 {
 }
 
 impl Bvh {
-    /// Build over primitives given by their bounds.
-    pub fn build(bounds: &[Aabb]) -> Bvh {
+    /// Build over primitives given by their bounds. Returns the hierarchy
+    /// and the order it puts the primitives in: every leaf is a range of
+    /// that order starting at a multiple of [`PACK`], the gaps between
+    /// leaves filled with `None`, so that a leaf's primitives can be stored
+    /// contiguously and tested in SIMD packs.
+    pub fn build(bounds: &[Aabb]) -> (Bvh, Vec<Option<u32>>) {
         let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
         let centroids: Vec<Vec3> = bounds.iter().map(|b| b.centroid()).collect();
         let mut nodes = Vec::with_capacity(2 * bounds.len().max(1));
         if !bounds.is_empty() {
             build_rec(bounds, &centroids, &mut order, 0, bounds.len(), &mut nodes);
         }
-        Bvh { nodes, order }
+        let mut bvh = Bvh { nodes };
+        let padded = bvh.pad_leaves(&order);
+        (bvh, padded)
+    }
+
+    /// Re-lay `order` so that every leaf starts at a multiple of [`PACK`],
+    /// with `None` in the gaps, and point the leaves at their new ranges.
+    fn pad_leaves(&mut self, order: &[u32]) -> Vec<Option<u32>> {
+        let mut padded = Vec::with_capacity(order.len() * 2);
+        for node in self.nodes.iter_mut().filter(|n| n.count > 0) {
+            while padded.len() % PACK != 0 {
+                padded.push(None);
+            }
+            let start = node.offset as usize;
+            let new_start = padded.len();
+            padded.extend(
+                order[start..start + node.count as usize]
+                    .iter()
+                    .map(|&p| Some(p)),
+            );
+            node.offset = new_start as u32;
+        }
+        while padded.len() % PACK != 0 {
+            padded.push(None);
+        }
+        padded
     }
 
     /// Bounds of the whole scene (empty if there is nothing).
@@ -134,28 +163,11 @@ impl Bvh {
             .unwrap_or(Aabb::EMPTY)
     }
 
-    /// Visit the primitives whose boxes the ray `o + t d`, `t ∈ [0, t_max]`,
-    /// may hit, nearest subtree first. `hit(prim, t_max)` tests primitive
-    /// `prim` and returns the new `t_max` (smaller if it hit).
-    #[inline]
-    pub fn traverse(
-        &self,
-        o: Vec3,
-        d: Vec3,
-        t_max: f32,
-        mut hit: impl FnMut(u32, f32) -> f32,
-    ) -> f32 {
-        self.traverse_leaves(o, d, t_max, |start, count, mut t_max| {
-            for &p in &self.order[start as usize..(start + count) as usize] {
-                t_max = hit(p, t_max);
-            }
-            t_max
-        })
-    }
-
-    /// Like [`Self::traverse`], but calls `hit(start, count, t_max)` once per
-    /// leaf with its range in [`Self::order`]. A negative `t_max` returned
-    /// by `hit` ends the traversal.
+    /// Visit the leaves whose boxes the ray `o + t d`, `t ∈ [0, t_max]`,
+    /// may hit, nearest subtree first: `hit(start, count, t_max)` is called
+    /// once per leaf with its range in the order [`Self::build`] returned,
+    /// and returns the new `t_max` (smaller if it hit something). A
+    /// negative `t_max` returned by `hit` ends the traversal.
     #[inline]
     pub fn traverse_leaves(
         &self,
@@ -201,26 +213,6 @@ impl Bvh {
             idx = stack[sp];
         }
         t_max
-    }
-
-    /// Re-lay [`Self::order`] so that every leaf starts at a multiple of
-    /// `width`, filling the gaps with `pad` (lets the caller test a leaf's
-    /// primitives in SIMD packs of `width`).
-    pub fn pad_leaves(&mut self, width: usize, pad: u32) {
-        let mut order = Vec::with_capacity(self.order.len() * 2);
-        for node in self.nodes.iter_mut().filter(|n| n.count > 0) {
-            while order.len() % width != 0 {
-                order.push(pad);
-            }
-            let start = node.offset as usize;
-            let new_start = order.len();
-            order.extend_from_slice(&self.order[start..start + node.count as usize]);
-            node.offset = new_start as u32;
-        }
-        while order.len() % width != 0 {
-            order.push(pad);
-        }
-        self.order = order;
     }
 }
 
@@ -302,7 +294,11 @@ fn build_rec(
             }
             let cost =
                 acc.surface_area() * packs(cnt) + right_area[split] * packs(right_count[split]);
-            if best.map_or(true, |(c, _, _)| cost < c) {
+            let better = match best {
+                Some((c, _, _)) => cost < c,
+                None => true,
+            };
+            if better {
                 best = Some((cost, axis, split));
             }
         }
@@ -366,13 +362,21 @@ mod tests {
                 }
             })
             .collect();
-        let bvh = Bvh::build(&boxes);
+        let (bvh, order) = Bvh::build(&boxes);
+        // Every primitive is in the order once; leaves start at pack boundaries.
+        let mut listed: Vec<u32> = order.iter().flatten().copied().collect();
+        listed.sort_unstable();
+        assert_eq!(listed, (0..boxes.len() as u32).collect::<Vec<_>>());
+        assert_eq!(order.len() % PACK, 0);
         for _ in 0..200 {
             let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
             let d = crate::math::sample_uniform_sphere(s.next_2d());
             let mut visited = vec![false; boxes.len()];
-            bvh.traverse(o, d, f32::INFINITY, |p, t| {
-                visited[p as usize] = true;
+            bvh.traverse_leaves(o, d, f32::INFINITY, |start, count, t| {
+                assert_eq!(start as usize % PACK, 0);
+                for p in order[start as usize..(start + count) as usize].iter() {
+                    visited[p.expect("no padding inside a leaf") as usize] = true;
+                }
                 t
             });
             for (i, b) in boxes.iter().enumerate() {

@@ -28,12 +28,14 @@
 //! </medium>
 //! ```
 
+use super::dda::{self, Lattice};
 use super::{DistanceEvent, DistanceSample};
-use crate::geometry::Ray;
-use crate::math::{mean, Sampler, Spectrum};
+use crate::error::RenderError;
+use crate::math::Sampler;
 use crate::phase::Phase;
-use crate::render::RenderError;
+use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, VolumeDesc};
+use crate::spectrum::{mean, Spectrum};
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 
@@ -57,9 +59,7 @@ impl GridTex {
                 g.channels
             )));
         }
-        if g.shape.iter().any(|&n| n == 0)
-            || g.data.len() != g.shape.iter().product::<usize>() * g.channels
-        {
+        if g.shape.contains(&0) || g.data.len() != g.shape.iter().product::<usize>() * g.channels {
             return Err(RenderError::InvalidScene(format!(
                 "{what}: grid data does not match its {:?} shape",
                 g.shape
@@ -208,6 +208,25 @@ impl GridTex {
     pub fn eval_world(&self, p: Vec3) -> Spectrum {
         self.eval_unit(self.to_unit.transform_point3(p))
     }
+
+    /// `ray` in unit-cube coordinates (the same parameter `t` as the world
+    /// ray, since the map is affine).
+    #[inline]
+    pub fn unit_ray(&self, ray: &Ray) -> (Vec3, Vec3) {
+        (
+            self.to_unit.transform_point3(ray.o),
+            self.to_unit.transform_vector3(ray.d),
+        )
+    }
+
+    /// Voxels per axis.
+    pub fn res(&self) -> [usize; 3] {
+        self.res
+    }
+
+    pub fn filter(&self) -> GridFilter {
+        self.filter
+    }
 }
 
 /// Albedo of a grid medium.
@@ -247,7 +266,7 @@ impl GridMedium {
         }
         let tex = GridTex::new(sigma_t, &what)?;
         let albedo = match albedo {
-            VolumeDesc::Constant(a) => Albedo::Constant(crate::math::rgb(*a)),
+            VolumeDesc::Constant(a) => Albedo::Constant(crate::spectrum::from_rgb(*a)),
             VolumeDesc::Grid(g) => {
                 Albedo::Grid(GridTex::new(g, &format!("medium {index} albedo"))?)
             }
@@ -275,7 +294,7 @@ impl GridMedium {
                     for z in z0..=z1 {
                         for y in y0..=y1 {
                             for x in x0..=x1 {
-                                m = m.max(crate::math::max_comp(tex.voxel(x, y, z)));
+                                m = m.max(crate::spectrum::max_comp(tex.voxel(x, y, z)));
                             }
                         }
                     }
@@ -300,17 +319,14 @@ impl GridMedium {
         self.sigma_t.eval_unit(u) * self.scale
     }
 
-    /// Walk the super-voxels crossed by `ray` over `[0, t_max]`, calling
-    /// `f(t0, t1, μ)` for each piece with constant majorant `μ`, in order.
-    /// Returns the `Break` value if `f` stopped early. `o`, `d` are the ray in
-    /// unit-cube coordinates (same parameter `t` as in the world).
-    #[inline]
     /// The tentative collisions of majorant-driven tracking along the
     /// unit-space ray `o + t d`, `t < t_max`: exponential steps of unit
-    /// optical depth in the local majorant `μ` of each DDA cell. At each one
+    /// optical depth in the local majorant `μ` of each super-voxel the ray
+    /// crosses ([`dda::walk`]). At each one
     /// `f(t, μ, sampler)` decides: `Break` ends the walk, `Continue` draws the
     /// next step (after `f`'s own draws). Delta tracking (distance sampling)
     /// and ratio tracking (transmittance) differ only in `f`.
+    #[inline]
     fn track<B>(
         &self,
         o: Vec3,
@@ -321,7 +337,13 @@ impl GridMedium {
     ) -> ControlFlow<B> {
         // Remaining optical depth (in majorant units) to the next tentative collision.
         let mut tau = -(1.0 - s.next_1d()).ln();
-        self.walk(o, d, t_max, |t0, t1, mu| {
+        let lattice = Lattice {
+            res: self.maj_res,
+            offset: 0.0,
+        };
+        dda::walk(o, d, t_max, &lattice, |t0, t1, cell| {
+            let [x, y, z] = cell.map(|c| c as usize);
+            let mu = self.maj[(z * self.maj_res[1] + y) * self.maj_res[0] + x];
             if mu <= 0.0 {
                 return ControlFlow::Continue(());
             }
@@ -339,79 +361,8 @@ impl GridMedium {
         })
     }
 
-    fn walk<B>(
-        &self,
-        o: Vec3,
-        d: Vec3,
-        t_max: f32,
-        mut f: impl FnMut(f32, f32, f32) -> ControlFlow<B>,
-    ) -> ControlFlow<B> {
-        // Clip to the unit cube.
-        let inv = d.recip();
-        let ta = (Vec3::ZERO - o) * inv;
-        let tb = (Vec3::ONE - o) * inv;
-        let t_in = ta.min(tb).max_element().max(0.0);
-        let t_out = ta.max(tb).min_element().min(t_max);
-        if !(t_in < t_out) {
-            return ControlFlow::Continue(());
-        }
-        let res = Vec3::new(
-            self.maj_res[0] as f32,
-            self.maj_res[1] as f32,
-            self.maj_res[2] as f32,
-        );
-        let p = (o + d * t_in) * res;
-        let mut cell = [0i32; 3];
-        let mut step = [0i32; 3];
-        let mut t_next = [f32::INFINITY; 3];
-        let mut dt = [f32::INFINITY; 3];
-        for k in 0..3 {
-            cell[k] = (p[k].floor() as i32).clamp(0, self.maj_res[k] as i32 - 1);
-            if d[k] > 0.0 {
-                step[k] = 1;
-                t_next[k] = ((cell[k] + 1) as f32 / res[k] - o[k]) * inv[k];
-                dt[k] = inv[k] / res[k];
-            } else if d[k] < 0.0 {
-                step[k] = -1;
-                t_next[k] = (cell[k] as f32 / res[k] - o[k]) * inv[k];
-                dt[k] = -inv[k] / res[k];
-            }
-        }
-        let mut t = t_in;
-        loop {
-            // Axis whose boundary comes first.
-            let k = if t_next[0] < t_next[1] {
-                if t_next[0] < t_next[2] {
-                    0
-                } else {
-                    2
-                }
-            } else if t_next[1] < t_next[2] {
-                1
-            } else {
-                2
-            };
-            let t1 = t_next[k].min(t_out);
-            let idx = (cell[2] as usize * self.maj_res[1] + cell[1] as usize) * self.maj_res[0]
-                + cell[0] as usize;
-            if t1 > t {
-                f(t, t1, self.maj[idx])?;
-            }
-            if t1 >= t_out {
-                return ControlFlow::Continue(());
-            }
-            t = t1;
-            cell[k] += step[k];
-            if cell[k] < 0 || cell[k] >= self.maj_res[k] as i32 {
-                return ControlFlow::Continue(());
-            }
-            t_next[k] += dt[k];
-        }
-    }
-
     pub fn sample_distance(&self, ray: &Ray, t_max: f32, s: &mut Sampler) -> DistanceSample {
-        let o = self.sigma_t.to_unit.transform_point3(ray.o);
-        let d = self.sigma_t.to_unit.transform_vector3(ray.d);
+        let (o, d) = self.sigma_t.unit_ray(ray);
         let mut weight = Spectrum::ONE;
         let grey = self.sigma_t.channels == 1;
         let r = self.track(o, d, t_max, s, |t, mu, s| {
@@ -459,8 +410,7 @@ impl GridMedium {
 
     /// Ratio tracking: the product of `1 - σ_t/μ` over tentative collisions.
     pub fn transmittance(&self, ray: &Ray, t_end: f32, s: &mut Sampler) -> Spectrum {
-        let o = self.sigma_t.to_unit.transform_point3(ray.o);
-        let d = self.sigma_t.to_unit.transform_vector3(ray.d);
+        let (o, d) = self.sigma_t.unit_ray(ray);
         let mut tr = Spectrum::ONE;
         let grey = self.sigma_t.channels == 1;
         let r: ControlFlow<()> = self.track(o, d, t_end, s, |t, mu, s| {
@@ -474,7 +424,7 @@ impl GridMedium {
             // Russian roulette on small estimates keeps the cost bounded
             // in dense regions; survivors are reweighted by 1/q, so the
             // estimator stays unbiased.
-            let m = crate::math::max_comp(tr);
+            let m = crate::spectrum::max_comp(tr);
             if m < 0.1 {
                 let q = 0.75;
                 if s.next_1d() < q {
@@ -551,40 +501,6 @@ mod tests {
                 [0, 1, 2].map(|k| ((u[k] * m.maj_res[k] as f32) as usize).min(m.maj_res[k] - 1));
             let mu = m.maj[(c[2] * m.maj_res[1] + c[1]) * m.maj_res[0] + c[0]];
             assert!(m.sigma_t_unit(u).x <= mu, "{u:?}");
-        }
-    }
-
-    /// The DDA covers [t_in, t_out] with contiguous pieces.
-    #[test]
-    fn dda_pieces_are_contiguous() {
-        let m = GridMedium::new(
-            &grid([16, 16, 16], vec![1.0; 4096]),
-            &VolumeDesc::Constant([1.0; 3]),
-            1.0,
-            Phase::Isotropic,
-            0,
-        )
-        .unwrap();
-        let mut s = Sampler::new(4, 0, 0);
-        for _ in 0..500 {
-            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 3.0 - Vec3::ONE;
-            let d = crate::math::sample_uniform_sphere(s.next_2d());
-            let mut last: Option<f32> = None;
-            let mut total = 0.0;
-            let _ = m.walk(o, d, f32::INFINITY, |t0, t1, _| -> ControlFlow<()> {
-                if let Some(l) = last {
-                    assert!((t0 - l).abs() < 1e-5);
-                }
-                last = Some(t1);
-                total += t1 - t0;
-                ControlFlow::Continue(())
-            });
-            // Chord length through the unit cube.
-            let inv = d.recip();
-            let ta = (Vec3::ZERO - o) * inv;
-            let tb = (Vec3::ONE - o) * inv;
-            let chord = (ta.max(tb).min_element() - ta.min(tb).max_element().max(0.0)).max(0.0);
-            assert!((total - chord).abs() < 1e-4, "{total} vs {chord}");
         }
     }
 }

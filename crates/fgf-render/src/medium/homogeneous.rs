@@ -13,9 +13,10 @@
 //! per-segment mixture is kept for callers that sample a single flight.
 
 use super::{DistanceEvent, DistanceSample};
-use crate::geometry::Ray;
-use crate::math::{mean, Sampler, Spectrum};
+use crate::math::Sampler;
 use crate::phase::Phase;
+use crate::ray::Ray;
+use crate::spectrum::{mean, Spectrum};
 
 #[derive(Debug, Clone)]
 pub struct Homogeneous {

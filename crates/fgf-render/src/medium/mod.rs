@@ -21,7 +21,7 @@
 //!   and ends on `end` (a light or a surface crossing is a `Surface` end).
 //!
 //! Classical (exponential) media ignore `start`/`end`: their transmittance
-//! is multiplicative. Non-exponential media (`theory.md` §4, issue 5) use
+//! is multiplicative. Non-exponential media (`theory.md` §4) use
 //! them to choose between the kernels: energy-conserving (free flights from
 //! `pdf = -dTr/dt`, shadow rays `Tr`) or reciprocal (free flights from
 //! `T_sm` after a `Surface` start and `T_mm` after a `Medium` start; shadow
@@ -32,7 +32,7 @@
 //!
 //! | XML | parameters | notes |
 //! |---|---|---|
-//! | `homogeneous` | `sigma_t` (1/m, float or rgb, default 1), `albedo` (float or rgb in [0,1], default 0.75), `scale` (default 1), `phase` | analytic free flights, one-sample MIS over the RGB channels |
+//! | `homogeneous` | `sigma_t` (1/length, float or rgb, default 1), `albedo` (float or rgb in \[0, 1\], default 0.75), `scale` (default 1), `phase` | analytic free flights, one-sample MIS over the RGB channels |
 //! | `heterogeneous` | `sigma_t` and `albedo` as `gridvolume` or constants, `scale`, `phase` | delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA |
 //! | `fgf`, `nonexponential` | `sigma_t`, `albedo`, `scale`, `phase`; `hurst`, `sw`, `length` (fgf) or `transmittance` with `alpha` / `h`, `c`; `kernel`; optional `density` gridvolume | non-exponential transmittance (`theory.md` §3–4): see [`nonexp`] |
 //!
@@ -47,16 +47,18 @@
 //! </shape>
 //! ```
 
+pub mod dda;
 pub mod flight_table;
 pub mod grid;
 pub mod homogeneous;
 pub mod nonexp;
 
-use crate::geometry::Ray;
-use crate::math::{Sampler, Spectrum};
+use crate::error::RenderError;
+use crate::math::Sampler;
 use crate::phase::Phase;
-use crate::render::RenderError;
+use crate::ray::Ray;
 use crate::scene::desc::{MediumDesc, VolumeDesc};
+use crate::spectrum::{from_rgb, Spectrum};
 
 /// How the current free-flight segment started (`theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -98,31 +100,53 @@ pub struct DistanceSample {
 pub enum Medium {
     Homogeneous(homogeneous::Homogeneous),
     Grid(Box<grid::GridMedium>),
-    /// `fgf` and `nonexponential` (issue 5; [`nonexp`]).
+    /// `fgf` and `nonexponential` ([`nonexp`]).
     NonExp(Box<nonexp::NonExp>),
 }
 
 impl Medium {
+    /// Build medium `index` of the scene from its description.
     pub fn from_desc(d: &MediumDesc, index: usize) -> Result<Medium, RenderError> {
+        let homogeneous = |sigma_t: Spectrum, albedo, phase| {
+            let m =
+                homogeneous::Homogeneous::new(sigma_t, from_rgb(albedo), Phase::from_desc(phase));
+            Ok(Medium::Homogeneous(m))
+        };
         match d {
-            MediumDesc::Homogeneous { sigma_t, albedo, phase } => {
-                Ok(Medium::Homogeneous(homogeneous::Homogeneous::new(crate::math::rgb(*sigma_t), crate::math::rgb(*albedo), Phase::from_desc(phase))))
-            }
-            MediumDesc::Heterogeneous { sigma_t: VolumeDesc::Constant(s), albedo: VolumeDesc::Constant(a), scale, phase } => {
+            MediumDesc::Homogeneous {
+                sigma_t,
+                albedo,
+                phase,
+            } => homogeneous(from_rgb(*sigma_t), *albedo, phase),
+            MediumDesc::Heterogeneous {
+                sigma_t: VolumeDesc::Constant(s),
+                albedo: VolumeDesc::Constant(a),
+                scale,
+                phase,
+            } => {
                 // Constant volumes make a homogeneous medium (same transport).
-                Ok(Medium::Homogeneous(homogeneous::Homogeneous::new(
-                    crate::math::rgb(*s) * *scale,
-                    crate::math::rgb(*a),
-                    Phase::from_desc(phase),
-                )))
+                homogeneous(from_rgb(*s) * *scale, *a, phase)
             }
-            MediumDesc::Heterogeneous { sigma_t: VolumeDesc::Grid(g), albedo, scale, phase } => {
-                Ok(Medium::Grid(Box::new(grid::GridMedium::new(g, albedo, *scale, Phase::from_desc(phase), index)?)))
+            MediumDesc::Heterogeneous {
+                sigma_t: VolumeDesc::Grid(g),
+                albedo,
+                scale,
+                phase,
+            } => {
+                let m = grid::GridMedium::new(g, albedo, *scale, Phase::from_desc(phase), index)?;
+                Ok(Medium::Grid(Box::new(m)))
             }
-            MediumDesc::Heterogeneous { sigma_t: VolumeDesc::Constant(_), albedo: VolumeDesc::Grid(_), .. } => Err(RenderError::Unsupported(format!(
-                "medium {index}: a heterogeneous medium with a constant sigma_t and a grid albedo is not supported; give sigma_t as a gridvolume"
+            MediumDesc::Heterogeneous {
+                sigma_t: VolumeDesc::Constant(_),
+                albedo: VolumeDesc::Grid(_),
+                ..
+            } => Err(RenderError::Unsupported(format!(
+                "medium {index}: a heterogeneous medium with a constant sigma_t and a grid albedo \
+                 is not supported; give sigma_t as a gridvolume"
             ))),
-            MediumDesc::NonExponential { .. } => Ok(Medium::NonExp(Box::new(nonexp::NonExp::from_desc(d, index)?))),
+            MediumDesc::NonExponential { .. } => Ok(Medium::NonExp(Box::new(
+                nonexp::NonExp::from_desc(d, index)?,
+            ))),
         }
     }
 

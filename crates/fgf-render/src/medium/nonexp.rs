@@ -1,5 +1,5 @@
 //! Non-exponential media: the `fgf` and `nonexponential` plugins
-//! (`theory.md` §3–4, issue 5).
+//! (`theory.md` §3–4).
 //!
 //! # User documentation
 //!
@@ -97,16 +97,19 @@
 //! the grid's box `ρ = 0` (the medium is empty there, as for Mitsuba's
 //! `heterogeneous`).
 
+use super::dda::{self, Lattice};
 use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
-use crate::geometry::Ray;
-use crate::math::{Sampler, Spectrum};
+use crate::error::RenderError;
+use crate::math::Sampler;
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
-use crate::render::RenderError;
+use crate::ray::Ray;
 use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
+use crate::spectrum::Spectrum;
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
-use glam::{Affine3A, DVec3, Vec3};
+use glam::{DVec3, Vec3};
+use std::ops::ControlFlow;
 
 /// A non-exponential medium; see the module docs.
 #[derive(Debug, Clone)]
@@ -123,9 +126,6 @@ pub struct NonExp {
     pub phase: Phase,
     density: Option<Density>,
 }
-
-/// The per-channel value that a function of the models returns.
-type Rgb64 = [f64; 3];
 
 impl NonExp {
     /// Build from a `MediumDesc::NonExponential`; `index` names the medium in
@@ -165,8 +165,10 @@ impl NonExp {
                     DavisWeinstein::new(s, h, c).map(Model::from)
                 }
             };
-            models[c] =
-                Some(m.map_err(|e| RenderError::InvalidScene(format!("medium {index}: {e}")))?);
+            models[c] = Some(m.map_err(|source| RenderError::Param {
+                medium: index,
+                source,
+            })?);
         }
         if let Some(a) = albedo.iter().find(|a| !(0.0..=1.0).contains(*a)) {
             return Err(RenderError::InvalidScene(format!(
@@ -192,17 +194,18 @@ impl NonExp {
             models,
             grey,
             tables,
-            albedo: crate::math::rgb(*albedo),
+            albedo: crate::spectrum::from_rgb(*albedo),
             kernel: *kernel,
             phase: Phase::from_desc(phase),
             density,
         })
     }
 
-    /// `f(M_c)` for each channel, `empty` for a transparent channel; computed
-    /// once for a grey medium.
+    /// `f(M_c)` for each channel (in f64, made a [`Spectrum`] only as the
+    /// ratios below), `empty` for a transparent channel; computed once for a
+    /// grey medium.
     #[inline]
-    fn per_channel(&self, empty: f64, f: impl Fn(&Model) -> f64) -> Rgb64 {
+    fn per_channel(&self, empty: f64, f: impl Fn(&Model) -> f64) -> [f64; 3] {
         let g = |m: &Option<Model>| m.as_ref().map_or(empty, &f);
         if self.grey {
             let v = g(&self.models[0]);
@@ -401,7 +404,7 @@ impl NonExp {
 /// an underflowed `T_ms` far away) it returns `fallback` in every channel,
 /// the grey-medium value of the ratio, instead of a NaN.
 #[inline]
-fn ratio_to_mean(v: Rgb64, fallback: f64) -> Spectrum {
+fn ratio_to_mean(v: [f64; 3], fallback: f64) -> Spectrum {
     let m = (v[0] + v[1] + v[2]) / 3.0;
     if m > 0.0 && m.is_finite() {
         Spectrum::new((v[0] / m) as f32, (v[1] / m) as f32, (v[2] / m) as f32)
@@ -412,7 +415,7 @@ fn ratio_to_mean(v: Rgb64, fallback: f64) -> Spectrum {
 
 /// `v / v[hero]` per channel, or `None` when `v[hero]` is 0 or not finite.
 #[inline]
-fn ratio_to(v: Rgb64, hero: usize) -> Option<Spectrum> {
+fn ratio_to(v: [f64; 3], hero: usize) -> Option<Spectrum> {
     let h = v[hero];
     (h > 0.0 && h.is_finite())
         .then(|| Spectrum::new((v[0] / h) as f32, (v[1] / h) as f32, (v[2] / h) as f32))
@@ -431,13 +434,9 @@ const INVERT_MAX_ITER: u32 = 60;
 #[derive(Debug, Clone)]
 struct Density {
     tex: GridTex,
-    /// World to unit-cube coordinates (f64: the piece boundaries are found
-    /// from it).
-    to_unit: Affine3A,
-    res: [f64; 3],
-    /// Offset of the piece boundaries in voxel units: 0.5 (voxel centres)
-    /// for trilinear, 0 (voxel faces) for nearest.
-    offset: f64,
+    /// The planes where the interpolant changes polynomial piece: voxel
+    /// centres (offset 0.5) for trilinear, voxel faces (0) for nearest.
+    pieces: Lattice<f64>,
 }
 
 impl Density {
@@ -450,26 +449,15 @@ impl Density {
                 g.grid.channels
             )));
         }
-        // Same world → unit-cube map as the grid texture (GridTex::new has
-        // already rejected a singular to_world and an empty bbox).
-        let mut to_unit = Affine3A::from_mat4(g.to_world).inverse();
-        if g.use_grid_bbox {
-            let b = g.grid.bbox;
-            let lo = Vec3::new(b[0], b[1], b[2]);
-            let ext = Vec3::new(b[3], b[4], b[5]) - lo;
-            to_unit = Affine3A::from_scale(ext.recip()) * Affine3A::from_translation(-lo) * to_unit;
-        }
-        let res = g.grid.shape.map(|n| n as f64);
-        let offset = match g.filter {
+        let offset = match tex.filter() {
             GridFilter::Trilinear => 0.5,
             GridFilter::Nearest => 0.0,
         };
-        Ok(Density {
-            tex,
-            to_unit,
-            res,
+        let pieces = Lattice {
+            res: tex.res(),
             offset,
-        })
+        };
+        Ok(Density { tex, pieces })
     }
 
     #[inline]
@@ -490,82 +478,21 @@ impl Density {
         h * (self.rho(o, d, m - h * G) + self.rho(o, d, m + h * G))
     }
 
-    /// The ray in unit-cube coordinates (same parameter `t` as the world ray).
+    /// The ray in unit-cube coordinates (same parameter `t` as the world
+    /// ray), in f64 for the piece boundaries.
     #[inline]
     fn unit_ray(&self, ray: &Ray) -> (DVec3, DVec3) {
-        let o = self.to_unit.transform_point3(ray.o);
-        let d = self.to_unit.transform_vector3(ray.d);
-        (
-            DVec3::new(o.x as f64, o.y as f64, o.z as f64),
-            DVec3::new(d.x as f64, d.y as f64, d.z as f64),
-        )
-    }
-
-    /// Walk the polynomial pieces of `ρ` along the ray over `[0, t_max]`
-    /// inside the unit cube, calling `f(a, b)` in order; stops when `f`
-    /// returns `Some`.
-    fn walk<R>(
-        &self,
-        o: DVec3,
-        d: DVec3,
-        t_max: f64,
-        mut f: impl FnMut(f64, f64) -> Option<R>,
-    ) -> Option<R> {
-        // Clip to the unit cube.
-        let inv = d.recip();
-        let ta = (DVec3::ZERO - o) * inv;
-        let tb = (DVec3::ONE - o) * inv;
-        let t_in = ta.min(tb).max_element().max(0.0);
-        let t_out = ta.max(tb).min_element().min(t_max);
-        // Also false for NaN bounds (a degenerate ray): nothing to walk.
-        if t_in.partial_cmp(&t_out) != Some(std::cmp::Ordering::Less) {
-            return None;
-        }
-        // Per axis: the next boundary plane (j + offset)/res crossed after
-        // t_in, and the parameter step between successive planes.
-        let mut t_next = [f64::INFINITY; 3];
-        let mut dt = [f64::INFINITY; 3];
-        for k in 0..3 {
-            if d[k] == 0.0 {
-                continue;
-            }
-            let x = (o[k] + d[k] * t_in) * self.res[k] - self.offset;
-            let j = if d[k] > 0.0 {
-                x.floor() + 1.0
-            } else {
-                x.ceil() - 1.0
-            };
-            t_next[k] = ((j + self.offset) / self.res[k] - o[k]) * inv[k];
-            dt[k] = (inv[k] / self.res[k]).abs();
-        }
-        let mut t = t_in;
-        while t < t_out {
-            let k = if t_next[0] <= t_next[1] && t_next[0] <= t_next[2] {
-                0
-            } else if t_next[1] <= t_next[2] {
-                1
-            } else {
-                2
-            };
-            let t1 = t_next[k].min(t_out);
-            if t1 > t {
-                if let Some(r) = f(t, t1) {
-                    return Some(r);
-                }
-                t = t1;
-            }
-            t_next[k] += dt[k];
-        }
-        None
+        let (o, d) = self.tex.unit_ray(ray);
+        (o.as_dvec3(), d.as_dvec3())
     }
 
     /// `s(t_end) = ∫_0^t_end ρ` along `ray` (world parameter).
     fn optical_path(&self, ray: &Ray, t_end: f64) -> f64 {
         let (o, d) = self.unit_ray(ray);
         let mut sum = 0.0;
-        self.walk(o, d, t_end, |a, b| -> Option<()> {
+        let _: ControlFlow<()> = dda::walk(o, d, t_end, &self.pieces, |a, b, _| {
             sum += self.piece_integral(o, d, a, b);
-            None
+            ControlFlow::Continue(())
         });
         sum
     }
@@ -575,11 +502,11 @@ impl Density {
     fn invert(&self, ray: &Ray, t_max: f64, s_star: f64) -> (Option<f64>, f64) {
         let (o, d) = self.unit_ray(ray);
         let mut sum = 0.0;
-        let hit = self.walk(o, d, t_max, |a, b| {
+        let hit = dda::walk(o, d, t_max, &self.pieces, |a, b, _| {
             let piece = self.piece_integral(o, d, a, b);
             if sum + piece < s_star {
                 sum += piece;
-                return None;
+                return ControlFlow::Continue(());
             }
             // The root lies in [a, b]: F(t) = ∫_a^t ρ - r is increasing
             // (ρ ≥ 0) with F' = ρ(t). Newton from the linear guess, kept in
@@ -606,15 +533,15 @@ impl Density {
                     0.5 * (lo + hi)
                 };
                 if (next - t).abs() <= INVERT_TOL * (b - a) || hi - lo <= INVERT_TOL * (b - a) {
-                    return Some(next);
+                    return ControlFlow::Break(next);
                 }
                 t = next;
             }
-            Some(t)
+            ControlFlow::Break(t)
         });
         match hit {
-            Some(t) => (Some(t), s_star),
-            None => (None, sum),
+            ControlFlow::Break(t) => (Some(t), s_star),
+            ControlFlow::Continue(()) => (None, sum),
         }
     }
 }

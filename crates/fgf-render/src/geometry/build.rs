@@ -1,0 +1,323 @@
+//! Compiling the shapes of a scene: validation, world-space primitives,
+//! area-sampling tables, then the BVH and the leaf packs in its order.
+
+use super::bvh::{Aabb, Bvh};
+use super::pack::TriPack;
+use super::types::{
+    Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI, PAD,
+};
+use super::Geometry;
+use crate::error::RenderError;
+use crate::scene::desc::{GeometryDesc, ShapeDesc};
+use glam::{Affine3A, Mat3, Mat4, Vec3};
+use std::f32::consts::PI;
+
+/// Faces of a mesh: triangles, or parallelograms given by their corners in
+/// order around the boundary (the fourth corner is implied by the others).
+enum Faces<'a> {
+    Tris(&'a [[u32; 3]]),
+    Quads(&'a [[u32; 4]]),
+}
+
+/// The scale of `m` along x, and whether its linear part is a similarity
+/// (rotation and uniform scale), which a sphere's `to_world` must be for it
+/// to stay a sphere, as in Mitsuba.
+fn similarity_scale(m: &Mat4) -> (f32, bool) {
+    let l = Mat3::from_mat4(*m);
+    let sx = l.x_axis.length();
+    let (sy, sz) = (l.y_axis.length(), l.z_axis.length());
+    let ortho =
+        l.x_axis.dot(l.y_axis).abs() + l.y_axis.dot(l.z_axis).abs() + l.x_axis.dot(l.z_axis).abs();
+    let similar =
+        (sx - sy).abs() <= 1e-4 * sx && (sx - sz).abs() <= 1e-4 * sx && ortho <= 1e-4 * sx * sx;
+    (sx, similar)
+}
+
+/// The checks a shape must pass to be compiled: a finite `to_world`, mesh
+/// faces that refer to existing vertices, a sphere under a similarity with
+/// a positive finite radius, a disk under an invertible map.
+fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
+    let m = shape.to_world;
+    let invalid = |what: String| Err(RenderError::InvalidScene(format!("{}: {what}", shape.name)));
+    if !m.is_finite() {
+        return invalid("to_world has non-finite entries".into());
+    }
+    match &shape.geometry {
+        GeometryDesc::Mesh(mesh) => {
+            for (k, t) in mesh.indices.iter().enumerate() {
+                if t.iter().any(|&i| i as usize >= mesh.positions.len()) {
+                    return invalid(format!("face {k} refers to a missing vertex"));
+                }
+            }
+        }
+        GeometryDesc::Sphere { radius, .. } => {
+            let (sx, similar) = similarity_scale(&m);
+            if !similar {
+                return invalid(
+                    "a sphere's to_world must be a rotation, uniform scale and translation".into(),
+                );
+            }
+            let r = radius * sx;
+            if !(r > 0.0 && r.is_finite()) {
+                return invalid("sphere radius must be positive and finite".into());
+            }
+        }
+        GeometryDesc::Disk => {
+            if m.determinant().abs() < 1e-20 {
+                return invalid("disk to_world is singular".into());
+            }
+        }
+        GeometryDesc::Cube | GeometryDesc::Rectangle => {}
+    }
+    Ok(())
+}
+
+/// The primitives of the shapes compiled so far, in shape order.
+#[derive(Default)]
+struct Builder {
+    tris: Vec<Tri>,
+    vertex_normals: Vec<[Vec3; 3]>,
+    spheres: Vec<Sphere>,
+    disks: Vec<Disk>,
+    /// Primitive references, in the order they were added.
+    prims: Vec<u32>,
+    sampling: Vec<ShapeSampling>,
+    areas: Vec<f32>,
+}
+
+impl Geometry {
+    /// Compile `shapes` (each checked by `validate` first) and build the
+    /// BVH over all their primitives.
+    pub fn build(shapes: &[ShapeDesc]) -> Result<Geometry, RenderError> {
+        let mut g = Builder::default();
+        for (si, shape) in shapes.iter().enumerate() {
+            validate(shape)?;
+            g.add_shape(si as u32, shape);
+        }
+        Ok(g.finish())
+    }
+}
+
+impl Builder {
+    /// Add one (validated) shape.
+    fn add_shape(&mut self, sid: u32, shape: &ShapeDesc) {
+        let m = shape.to_world;
+        let flip = if shape.flip_normals { -1.0 } else { 1.0 };
+        match &shape.geometry {
+            GeometryDesc::Cube => {
+                let mut pos = Vec::new();
+                let mut idx = Vec::new();
+                for axis in 0..3 {
+                    for s in [1.0f32, -1.0] {
+                        let mut nrm = Vec3::ZERO;
+                        nrm[axis] = s;
+                        let mut u = Vec3::ZERO;
+                        let mut v = Vec3::ZERO;
+                        u[(axis + 1) % 3] = 1.0;
+                        v[(axis + 2) % 3] = 1.0;
+                        // u × v = +e_axis; swap for the negative face so
+                        // the winding stays outward.
+                        if s < 0.0 {
+                            std::mem::swap(&mut u, &mut v);
+                        }
+                        let base = pos.len() as u32;
+                        pos.extend([nrm - u - v, nrm + u - v, nrm + u + v, nrm - u + v]);
+                        idx.push([base, base + 1, base + 2, base + 3]);
+                    }
+                }
+                self.add_mesh(sid, &m, &pos, None, Faces::Quads(&idx), flip);
+            }
+            GeometryDesc::Rectangle => {
+                let pos = [
+                    Vec3::new(-1.0, -1.0, 0.0),
+                    Vec3::new(1.0, -1.0, 0.0),
+                    Vec3::new(1.0, 1.0, 0.0),
+                    Vec3::new(-1.0, 1.0, 0.0),
+                ];
+                // Analytic in Mitsuba: its normal is the transformed +z
+                // normal, which differs from the winding when det < 0.
+                let det_sign = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
+                let quad = Faces::Quads(&[[0, 1, 2, 3]]);
+                self.add_mesh(sid, &m, &pos, None, quad, flip * det_sign);
+            }
+            GeometryDesc::Mesh(mesh) => {
+                let faces = Faces::Tris(&mesh.indices);
+                let normals = mesh.normals.as_deref();
+                self.add_mesh(sid, &m, &mesh.positions, normals, faces, flip);
+            }
+            GeometryDesc::Sphere { center, radius } => {
+                let (sx, _) = similarity_scale(&m);
+                let r = radius * sx;
+                self.areas.push(4.0 * PI * r * r);
+                let i = self.spheres.len() as u32;
+                self.sampling.push(ShapeSampling::Sphere(i));
+                self.prims.push((KIND_SPHERE << KIND_SHIFT) | i);
+                self.spheres.push(Sphere {
+                    center: m.transform_point3(*center),
+                    radius: r,
+                    sign: flip,
+                    shape: sid,
+                });
+            }
+            GeometryDesc::Disk => {
+                let to_world = Affine3A::from_mat4(m);
+                let to_local = to_world.inverse();
+                let n = (to_local.matrix3.transpose() * Vec3::Z).normalize() * flip;
+                let (x, y) = (to_world.matrix3.x_axis, to_world.matrix3.y_axis);
+                self.areas.push(PI * x.cross(y).length());
+                let i = self.disks.len() as u32;
+                self.sampling.push(ShapeSampling::Disk(i));
+                self.prims.push((KIND_DISK << KIND_SHIFT) | i);
+                self.disks.push(Disk {
+                    to_local,
+                    to_world,
+                    n,
+                    shape: sid,
+                });
+            }
+        }
+    }
+
+    fn add_mesh(
+        &mut self,
+        sid: u32,
+        m: &Mat4,
+        pos: &[Vec3],
+        normals: Option<&[Vec3]>,
+        faces: Faces,
+        sign: f32,
+    ) {
+        let wp: Vec<Vec3> = pos.iter().map(|&p| m.transform_point3(p)).collect();
+        let nm = Mat3::from_mat4(*m).inverse().transpose();
+        let wn: Option<Vec<Vec3>> = normals.map(|ns| {
+            ns.iter()
+                .map(|&n| (nm * n).normalize_or_zero() * sign)
+                .collect()
+        });
+        let first = self.tris.len() as u32;
+        let mut cdf = Vec::new();
+        let mut total = 0.0f32;
+        // Each face as (v0, edge to u = 1, edge to v = 1, parallelogram?,
+        // its vertex indices if a triangle: they index the vertex normals).
+        let face = |i0: u32, i1: u32, i2: u32| {
+            let v0 = wp[i0 as usize];
+            (v0, wp[i1 as usize] - v0, wp[i2 as usize] - v0)
+        };
+        type Face = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>);
+        let corners: Vec<Face> = match faces {
+            Faces::Tris(idx) => idx
+                .iter()
+                .map(|t| {
+                    let (v0, e1, e2) = face(t[0], t[1], t[2]);
+                    (v0, e1, e2, false, Some(*t))
+                })
+                .collect(),
+            Faces::Quads(idx) => idx
+                .iter()
+                .map(|q| {
+                    let (v0, e1, e2) = face(q[0], q[1], q[3]);
+                    (v0, e1, e2, true, None)
+                })
+                .collect(),
+        };
+        for (v0, e1, e2, quad, tri_idx) in corners {
+            let c = e1.cross(e2);
+            // Degenerate faces can never be hit and have no area.
+            if !(c.length_squared() > 0.0) || !c.is_finite() {
+                continue;
+            }
+            let normals_idx = match (&wn, tri_idx) {
+                (Some(wn), Some(t)) if t.iter().all(|&i| (i as usize) < wn.len()) => {
+                    self.vertex_normals.push([
+                        wn[t[0] as usize],
+                        wn[t[1] as usize],
+                        wn[t[2] as usize],
+                    ]);
+                    (self.vertex_normals.len() - 1) as u32
+                }
+                _ => u32::MAX,
+            };
+            let tri = Tri {
+                v0: v0.into(),
+                e1: e1.into(),
+                e2: e2.into(),
+                n: c.normalize() * sign,
+                shape: sid,
+                normals: normals_idx,
+                quad,
+            };
+            total += tri.area();
+            cdf.push(total);
+            self.prims
+                .push((KIND_TRI << KIND_SHIFT) | self.tris.len() as u32);
+            self.tris.push(tri);
+        }
+        if total > 0.0 {
+            for c in &mut cdf {
+                *c /= total;
+            }
+        }
+        self.areas.push(total);
+        self.sampling.push(ShapeSampling::Tris { first, cdf });
+    }
+
+    fn prim_bounds(&self, p: u32) -> Aabb {
+        let i = (p & INDEX_MASK) as usize;
+        match p >> KIND_SHIFT {
+            KIND_TRI => {
+                let t = &self.tris[i];
+                let b = Aabb::EMPTY
+                    .grow(t.v0.into())
+                    .grow((t.v0 + t.e1).into())
+                    .grow((t.v0 + t.e2).into());
+                if t.quad {
+                    b.grow((t.v0 + t.e1 + t.e2).into())
+                } else {
+                    b
+                }
+            }
+            KIND_SPHERE => {
+                let s = &self.spheres[i];
+                Aabb {
+                    min: s.center - Vec3::splat(s.radius),
+                    max: s.center + Vec3::splat(s.radius),
+                }
+            }
+            _ => {
+                let d = &self.disks[i];
+                let mut b = Aabb::EMPTY;
+                for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
+                    b = b.grow(d.to_world.transform_point3(Vec3::new(x, y, 0.0)));
+                }
+                b
+            }
+        }
+    }
+
+    /// The BVH over every primitive, the primitives stored in its leaf
+    /// order (each leaf starting a pack of 4) and the packs.
+    fn finish(self) -> Geometry {
+        let bounds: Vec<Aabb> = self.prims.iter().map(|&p| self.prim_bounds(p)).collect();
+        let (bvh, order) = Bvh::build(&bounds);
+        // Store primitives in leaf order so traversal reads them contiguously.
+        let prims: Vec<u32> = order
+            .iter()
+            .map(|i| i.map_or(PAD, |i| self.prims[i as usize]))
+            .collect();
+        let packs = prims
+            .chunks(4)
+            .map(|chunk| TriPack::new(chunk, &self.tris))
+            .collect();
+        Geometry {
+            tris: self.tris,
+            vertex_normals: self.vertex_normals,
+            spheres: self.spheres,
+            disks: self.disks,
+            prims,
+            packs,
+            bvh,
+            sampling: self.sampling,
+            areas: self.areas,
+        }
+    }
+}

@@ -1,0 +1,252 @@
+//! The geometry's queries: the nearest hit, the two nearest hits and every
+//! hit of a segment, all by one BVH traversal that tests each leaf's
+//! triangles 4 at a time and its spheres and disks analytically.
+
+use super::bvh::Aabb;
+use super::pack::splat_ray;
+use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
+use super::Geometry;
+use crate::ray::Ray;
+use glam::{Vec3, Vec4};
+
+impl Geometry {
+    /// World bounds of all surfaces.
+    pub fn bounds(&self) -> Aabb {
+        self.bvh.bounds()
+    }
+
+    /// Calls `f(prim, t, u, v)` for every hit with `0 < t < t_max` of the
+    /// primitives of the leaf `start..start + count` (both crossings of a
+    /// sphere), where `f` returns the new `t_max`: smaller to look only for
+    /// nearer hits, negative to stop (then this returns `false`).
+    #[inline(always)]
+    fn leaf_hits(
+        &self,
+        ray: &Ray,
+        od: &([Vec4; 3], [Vec4; 3]),
+        start: u32,
+        count: u32,
+        t_max: &mut f32,
+        mut f: impl FnMut(u32, f32, f32, f32) -> f32,
+    ) -> bool {
+        // Leaves start at multiples of 4 (see `Bvh::build`).
+        let end = start + count;
+        let mut k = start;
+        while k < end {
+            let pack = &self.packs[(k / 4) as usize];
+            let lanes = if end - k >= 4 {
+                0xF
+            } else {
+                (1u32 << (end - k)) - 1
+            };
+            if pack.tri_mask & lanes != 0 {
+                let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max, lanes);
+                if mask != 0 {
+                    let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+                    while mask != 0 {
+                        let l = mask.trailing_zeros() as usize;
+                        mask &= mask - 1;
+                        // A lane may have been overtaken by an earlier one.
+                        if t[l] < *t_max {
+                            *t_max = f(self.prims[k as usize + l], t[l], u[l], v[l]);
+                            if *t_max < 0.0 {
+                                return false;
+                            }
+                        }
+                    }
+                }
+            }
+            let mut other = pack.other_mask & lanes;
+            while other != 0 {
+                let lane = other.trailing_zeros();
+                other &= other - 1;
+                let p = self.prims[(k + lane) as usize];
+                let i = (p & INDEX_MASK) as usize;
+                let roots = if p >> KIND_SHIFT == KIND_SPHERE {
+                    sphere_roots(&self.spheres[i], ray)
+                } else {
+                    [disk_root(&self.disks[i], ray), f32::NAN]
+                };
+                for t in roots {
+                    if t > 0.0 && t < *t_max {
+                        *t_max = f(p, t, 0.0, 0.0);
+                        if *t_max < 0.0 {
+                            return false;
+                        }
+                    }
+                }
+            }
+            k += 4;
+        }
+        true
+    }
+
+    /// Nearest hit with `t < t_max`, if any.
+    #[inline(always)]
+    pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        // (primitive, t, barycentric u, v) of the nearest hit so far.
+        let mut best: Option<(u32, f32, f32, f32)> = None;
+        let od = splat_ray(ray);
+        self.bvh
+            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_max| {
+                self.leaf_hits(ray, &od, start, count, &mut t_max, |p, t, u, v| {
+                    best = Some((p, t, u, v));
+                    t
+                });
+                t_max
+            });
+        best.map(|b| self.make_hit(ray, HitRecord(b)))
+    }
+
+    /// The two nearest hits with `t < t_max`, nearer first. Used where the
+    /// nearest is likely a `null` boundary the path crosses: the second is
+    /// then the next hit of the continued ray, without a second traversal.
+    /// The second comes as a [`HitRecord`], made into a [`Hit`] by
+    /// [`Self::make_hit`] only if needed.
+    #[inline(always)]
+    pub fn intersect2(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, Option<HitRecord>) {
+        let mut best: [Option<(u32, f32, f32, f32)>; 2] = [None, None];
+        let od = splat_ray(ray);
+        self.bvh
+            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_leaf| {
+                self.leaf_hits(ray, &od, start, count, &mut t_leaf, |p, t, u, v| {
+                    // t is below the current second-nearest (t_leaf).
+                    match best[0] {
+                        Some(b) if b.1 <= t => best[1] = Some((p, t, u, v)),
+                        _ => {
+                            best[1] = best[0];
+                            best[0] = Some((p, t, u, v));
+                        }
+                    }
+                    best[1].map_or(t_max, |b| b.1)
+                });
+                t_leaf
+            });
+        (
+            best[0].map(|b| self.make_hit(ray, HitRecord(b))),
+            best[1].map(HitRecord),
+        )
+    }
+
+    /// The [`Hit`] of primitive `p` hit at `t` (barycentrics `u, v`).
+    #[inline(always)]
+    pub fn make_hit(&self, ray: &Ray, HitRecord((p, t, u, v)): HitRecord) -> Hit {
+        let i = (p & INDEX_MASK) as usize;
+        match p >> KIND_SHIFT {
+            KIND_TRI => {
+                let tri = &self.tris[i];
+                let ns = if tri.normals != u32::MAX {
+                    let vn = &self.vertex_normals[tri.normals as usize];
+                    let n = (1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2];
+                    n.try_normalize().unwrap_or(tri.n)
+                } else {
+                    tri.n
+                };
+                // The hit point from barycentrics is more accurate than o + t d.
+                Hit {
+                    t,
+                    p: (tri.v0 + u * tri.e1 + v * tri.e2).into(),
+                    n: tri.n,
+                    ns,
+                    shape: tri.shape,
+                }
+            }
+            KIND_SPHERE => {
+                let s = &self.spheres[i];
+                let pt = ray.at(t);
+                let n = (pt - s.center).normalize() * s.sign;
+                // Re-project onto the sphere to cancel the error of o + t d.
+                let p = s.center + (pt - s.center) * (s.radius / (pt - s.center).length());
+                Hit {
+                    t,
+                    p,
+                    n,
+                    ns: n,
+                    shape: s.shape,
+                }
+            }
+            _ => {
+                let d = &self.disks[i];
+                Hit {
+                    t,
+                    p: ray.at(t),
+                    n: d.n,
+                    ns: d.n,
+                    shape: d.shape,
+                }
+            }
+        }
+    }
+
+    /// Every crossing of the segment `o + t d`, `0 < t < t_max`, with a
+    /// surface, in no particular order: `visit(prim, shape, t, n)` gets a
+    /// primitive id (unique within the scene), the shape, the distance and
+    /// the geometric normal there. Returning `false` from `visit` ends the
+    /// query (an occluder was found), and then this returns `false`.
+    ///
+    /// One traversal answers a shadow ray that crosses any number of `null`
+    /// medium boundaries, where [`Self::intersect`] would be called once per
+    /// crossing.
+    pub fn for_each_hit(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(u32, u32, f32, Vec3) -> bool,
+    ) -> bool {
+        let od = splat_ray(ray);
+        let mut go = true;
+        self.bvh
+            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t| {
+                go = self.leaf_hits(ray, &od, start, count, &mut t, |p, t, _, _| {
+                    let i = (p & INDEX_MASK) as usize;
+                    let (shape, n) = match p >> KIND_SHIFT {
+                        KIND_TRI => (self.tris[i].shape, self.tris[i].n),
+                        KIND_SPHERE => {
+                            let s = &self.spheres[i];
+                            (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+                        }
+                        _ => (self.disks[i].shape, self.disks[i].n),
+                    };
+                    if visit(p, shape, t, n) {
+                        t_max
+                    } else {
+                        -1.0
+                    }
+                });
+                t
+            });
+        go
+    }
+}
+
+/// Both ray parameters where the ray's line meets the sphere (NaN if it
+/// misses), nearer first.
+#[inline]
+pub(super) fn sphere_roots(s: &Sphere, ray: &Ray) -> [f32; 2] {
+    let oc = ray.o - s.center;
+    let b = oc.dot(ray.d);
+    // r² - |oc - b d|² is the discriminant computed without the catastrophic
+    // cancellation of b² - (|oc|² - r²) for distant origins.
+    let perp = oc - b * ray.d;
+    let disc = s.radius * s.radius - perp.length_squared();
+    if disc < 0.0 {
+        return [f32::NAN; 2];
+    }
+    let sq = disc.sqrt();
+    [-b - sq, -b + sq]
+}
+
+/// Where the ray meets a disk (NaN if it misses).
+#[inline]
+pub(super) fn disk_root(d: &Disk, ray: &Ray) -> f32 {
+    let o = d.to_local.transform_point3(ray.o);
+    let dir = d.to_local.transform_vector3(ray.d);
+    // Affine maps keep the ray parameter, so the local t is the world t.
+    let t = -o.z / dir.z;
+    let p = o + t * dir;
+    if p.x * p.x + p.y * p.y <= 1.0 {
+        t
+    } else {
+        f32::NAN
+    }
+}

@@ -1,0 +1,245 @@
+//! Tests of the geometry: the queries against brute force, area sampling.
+
+use super::query::{disk_root, sphere_roots};
+use super::types::Tri;
+use super::*;
+use crate::ray::Ray;
+use crate::scene::desc::TriangleMesh;
+use crate::scene::desc::{GeometryDesc, ShapeDesc};
+use glam::{Mat4, Vec3, Vec3A};
+use std::sync::Arc;
+
+/// A shape with BSDF 0 and no emitter or media.
+fn plain_shape(geometry: GeometryDesc, to_world: Mat4) -> ShapeDesc {
+    ShapeDesc {
+        name: "shape".into(),
+        geometry,
+        to_world,
+        flip_normals: false,
+        bsdf: 0,
+        emitter: None,
+        interior: None,
+        exterior: None,
+    }
+}
+
+/// `n` random triangles of about `size` scattered over `[0, 4]³`.
+fn triangle_soup(s: &mut crate::math::Sampler, n: u32, size: f32) -> Arc<TriangleMesh> {
+    let mut r3 = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+    let mut positions = Vec::new();
+    let mut indices = Vec::new();
+    for i in 0..n {
+        let c = r3() * 4.0;
+        for _ in 0..3 {
+            positions.push(c + (r3() - Vec3::splat(0.5)) * size);
+        }
+        indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
+    }
+    Arc::new(TriangleMesh {
+        positions,
+        normals: None,
+        indices,
+    })
+}
+
+/// The BVH with 4-wide leaf packs finds the same nearest hit as a brute
+/// force loop over all triangles (random triangle soup, random rays).
+#[test]
+fn packed_bvh_matches_brute_force() {
+    let mut s = crate::math::Sampler::new(11, 0, 0);
+    let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+    let mesh = triangle_soup(&mut s, 300, 0.6);
+    let g = Geometry::build(&[plain_shape(GeometryDesc::Mesh(mesh), Mat4::IDENTITY)]).unwrap();
+    for _ in 0..2000 {
+        let o = r3(&mut s) * 6.0 - Vec3::ONE;
+        let d = crate::math::sample_uniform_sphere(s.next_2d());
+        let ray = Ray { o, d };
+        let got = g.intersect(&ray, f32::INFINITY).map(|h| h.t);
+        let want = g
+            .tris
+            .iter()
+            .filter_map(|t| intersect_tri(t, o.into(), d.into(), f32::INFINITY).map(|r| r.0))
+            .fold(None, |m: Option<f32>, t| Some(m.map_or(t, |m| m.min(t))));
+        match (got, want) {
+            (None, None) => {}
+            (Some(a), Some(b)) => assert!((a - b).abs() <= 1e-5 * (1.0 + b), "{a} vs {b}"),
+            other => panic!("{other:?}"),
+        }
+    }
+}
+
+/// A scene of every primitive kind (a triangle soup, cubes and
+/// rectangles as parallelograms, spheres, disks): the nearest, the two
+/// nearest and the all-hits queries agree with brute force over the
+/// primitives, for random rays and random segment lengths.
+#[test]
+fn queries_match_brute_force_on_mixed_primitives() {
+    use glam::Quat;
+    let mut s = crate::math::Sampler::new(12, 0, 0);
+    let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+    let mut shapes = Vec::new();
+    let mut push =
+        |geometry: GeometryDesc, to_world: Mat4| shapes.push(plain_shape(geometry, to_world));
+    push(
+        GeometryDesc::Mesh(triangle_soup(&mut s, 40, 0.8)),
+        Mat4::IDENTITY,
+    );
+    for _ in 0..6 {
+        let rot = Quat::from_axis_angle(
+            (r3(&mut s) - Vec3::splat(0.5)).normalize(),
+            3.0 * s.next_1d(),
+        );
+        let m =
+            Mat4::from_scale_rotation_translation(0.2 + r3(&mut s) * 0.6, rot, r3(&mut s) * 4.0);
+        push(GeometryDesc::Cube, m);
+        push(
+            GeometryDesc::Rectangle,
+            m * Mat4::from_translation(Vec3::Z * 0.3),
+        );
+        push(
+            GeometryDesc::Disk,
+            m * Mat4::from_translation(Vec3::X * 0.5),
+        );
+        let c = r3(&mut s) * 4.0;
+        push(
+            GeometryDesc::Sphere {
+                center: c,
+                radius: 0.1 + 0.5 * s.next_1d(),
+            },
+            Mat4::IDENTITY,
+        );
+    }
+    let g = Geometry::build(&shapes).unwrap();
+    assert!(g.tris.iter().any(|t| t.quad) && !g.spheres.is_empty() && !g.disks.is_empty());
+    let mut n_hits = 0usize;
+    for _ in 0..3000 {
+        let o = r3(&mut s) * 6.0 - Vec3::ONE;
+        let d = crate::math::sample_uniform_sphere(s.next_2d());
+        let ray = Ray { o, d };
+        let t_max = if s.next_1d() < 0.5 {
+            f32::INFINITY
+        } else {
+            6.0 * s.next_1d()
+        };
+        let mut want: Vec<(f32, u32)> = Vec::new();
+        for t in &g.tris {
+            if let Some((th, _, _)) = intersect_tri(t, o.into(), d.into(), t_max) {
+                want.push((th, t.shape));
+            }
+        }
+        for sp in &g.spheres {
+            for th in sphere_roots(sp, &ray) {
+                if th > 0.0 && th < t_max {
+                    want.push((th, sp.shape));
+                }
+            }
+        }
+        for dk in &g.disks {
+            let th = disk_root(dk, &ray);
+            if th > 0.0 && th < t_max {
+                want.push((th, dk.shape));
+            }
+        }
+        want.sort_by(|a, b| a.0.total_cmp(&b.0));
+        n_hits += want.len();
+        let close = |a: f32, b: f32| (a - b).abs() <= 1e-5 * (1.0 + b);
+        let near = g.intersect(&ray, t_max).map(|h| h.t);
+        match (near, want.first()) {
+            (None, None) => {}
+            (Some(a), Some(b)) => assert!(close(a, b.0), "nearest {a} vs {}", b.0),
+            other => panic!("nearest: {other:?}"),
+        }
+        let (h1, h2) = g.intersect2(&ray, t_max);
+        assert_eq!(h1.map(|h| h.t), near);
+        match (h2.map(|r| g.make_hit(&ray, r).t), want.get(1)) {
+            (None, None) => {}
+            (Some(a), Some(b)) => assert!(close(a, b.0), "second {a} vs {}", b.0),
+            other => panic!("second: {other:?}"),
+        }
+        let mut all = Vec::new();
+        assert!(g.for_each_hit(&ray, t_max, |_, shape, t, n| {
+            assert!((n.length() - 1.0).abs() < 1e-4);
+            all.push((t, shape));
+            true
+        }));
+        all.sort_by(|a, b| a.0.total_cmp(&b.0));
+        assert_eq!(all.len(), want.len());
+        for (a, b) in all.iter().zip(&want) {
+            assert!(close(a.0, b.0) && a.1 == b.1, "{a:?} vs {b:?}");
+        }
+        // Stopping at the first hit visits exactly one.
+        if !want.is_empty() {
+            let mut visits = 0;
+            assert!(!g.for_each_hit(&ray, t_max, |_, _, _, _| {
+                visits += 1;
+                false
+            }));
+            assert_eq!(visits, 1);
+        }
+    }
+    assert!(n_hits > 1000, "too few hits to test anything: {n_hits}");
+}
+
+/// Parallelograms sample points uniformly over their whole area, and a
+/// cube's area is that of its six faces.
+#[test]
+fn cube_area_and_sampling() {
+    let cube = plain_shape(
+        GeometryDesc::Cube,
+        Mat4::from_scale(Vec3::new(1.0, 2.0, 3.0)),
+    );
+    let g = Geometry::build(&[cube]).unwrap();
+    // Faces 2x4, 4x6, 2x6 (two of each).
+    assert!((g.areas[0] - 2.0 * (8.0 + 24.0 + 12.0)).abs() < 1e-4);
+    let mut s = crate::math::Sampler::new(5, 0, 0);
+    let n = 40_000;
+    let mut on_top_far_corner = 0;
+    for _ in 0..n {
+        let ps = g.sample_shape(0, s.next_1d(), s.next_2d());
+        // On the surface of the box, normal pointing out of the face.
+        let q = ps.p / Vec3::new(1.0, 2.0, 3.0);
+        assert!((q.abs().max_element() - 1.0).abs() < 1e-5);
+        let axis = (0..3)
+            .max_by(|&a, &b| q[a].abs().total_cmp(&q[b].abs()))
+            .unwrap();
+        let mut face_n = Vec3::ZERO;
+        face_n[axis] = q[axis].signum();
+        assert!((ps.n - face_n).length() < 1e-6, "{:?} at {:?}", ps.n, ps.p);
+        if ps.n.y > 0.5 && ps.p.x > 0.0 && ps.p.z > 0.0 {
+            on_top_far_corner += 1;
+        }
+    }
+    // The quarter x, z > 0 of the +y face (2 x 6): area 3 of 88; 4 SE.
+    let p = 3.0 / 88.0;
+    let se = (p * (1.0 - p) / n as f64).sqrt();
+    let got = on_top_far_corner as f64 / n as f64;
+    assert!((got - p).abs() < 4.0 * se, "{got} vs {p}");
+}
+
+/// Möller–Trumbore, one triangle or parallelogram; returns `(t, u, v)`
+/// with `0 < t < t_max`.
+/// The reference the 4-wide [`TriPack::hits`] is tested against.
+fn intersect_tri(tri: &Tri, o: Vec3A, d: Vec3A, t_max: f32) -> Option<(f32, f32, f32)> {
+    let pvec = d.cross(tri.e2);
+    let det = tri.e1.dot(pvec);
+    if det == 0.0 {
+        return None;
+    }
+    let inv_det = 1.0 / det;
+    let tvec = o - tri.v0;
+    let u = tvec.dot(pvec) * inv_det;
+    if !(0.0..=1.0).contains(&u) {
+        return None;
+    }
+    let qvec = tvec.cross(tri.e1);
+    let v = d.dot(qvec) * inv_det;
+    if v < 0.0 || (if tri.quad { v > 1.0 } else { u + v > 1.0 }) {
+        return None;
+    }
+    let t = tri.e2.dot(qvec) * inv_det;
+    if t > 0.0 && t < t_max {
+        Some((t, u, v))
+    } else {
+        None
+    }
+}

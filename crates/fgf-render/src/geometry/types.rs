@@ -1,0 +1,98 @@
+//! The geometry's types: hits, the primitives (triangles and
+//! parallelograms, spheres, disks) and how a shape is sampled.
+
+use glam::{Affine3A, Vec3, Vec3A};
+
+/// A surface hit.
+#[derive(Debug, Clone, Copy)]
+pub struct Hit {
+    pub t: f32,
+    pub p: Vec3,
+    /// Unit geometric normal, oriented as described in the module docs.
+    pub n: Vec3,
+    /// Unit shading normal (interpolated vertex normals, else `n`).
+    pub ns: Vec3,
+    pub shape: u32,
+}
+
+/// A hit found by a query but not yet made into a [`Hit`]: primitive,
+/// distance and barycentrics.
+#[derive(Debug, Clone, Copy)]
+pub struct HitRecord(pub(super) (u32, f32, f32, f32));
+
+/// A triangle `v0 + u e1 + v e2` (`u, v ≥ 0`, `u + v ≤ 1`) or, with
+/// `quad`, a parallelogram (`0 ≤ u, v ≤ 1`). `cube` faces and `rectangle`s
+/// are parallelograms: one primitive instead of two triangles halves their
+/// intersection tests (the reference scenes are made of nothing else).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Tri {
+    // SIMD vectors for the intersection test.
+    pub(super) v0: Vec3A,
+    pub(super) e1: Vec3A,
+    pub(super) e2: Vec3A,
+    /// Oriented unit geometric normal.
+    pub(super) n: Vec3,
+    pub(super) shape: u32,
+    /// Index into `Geometry::vertex_normals`, or `u32::MAX` without normals.
+    pub(super) normals: u32,
+    pub(super) quad: bool,
+}
+
+impl Tri {
+    /// World-space area.
+    pub(super) fn area(&self) -> f32 {
+        let a = self.e1.cross(self.e2).length();
+        if self.quad {
+            a
+        } else {
+            0.5 * a
+        }
+    }
+}
+
+/// A sphere (a `sphere` shape under a similarity `to_world`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Sphere {
+    pub(super) center: Vec3,
+    pub(super) radius: f32,
+    /// -1 with `flip_normals` (normals point inward), else 1.
+    pub(super) sign: f32,
+    pub(super) shape: u32,
+}
+
+/// A `disk`: the unit disk of its local xy plane.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Disk {
+    pub(super) to_local: Affine3A,
+    pub(super) to_world: Affine3A,
+    pub(super) n: Vec3,
+    pub(super) shape: u32,
+}
+
+/// What is needed to sample a point uniformly on one shape.
+#[derive(Debug, Clone)]
+pub(super) enum ShapeSampling {
+    /// Triangles `first..first+cdf.len()`, `cdf` the running area fraction.
+    Tris {
+        first: u32,
+        cdf: Vec<f32>,
+    },
+    Sphere(u32),
+    Disk(u32),
+}
+
+/// A point sampled on a shape.
+#[derive(Debug, Clone, Copy)]
+pub struct PositionSample {
+    pub p: Vec3,
+    pub n: Vec3,
+}
+
+// Primitive references pack the kind in the top two bits.
+pub(super) const KIND_SHIFT: u32 = 30;
+pub(super) const KIND_TRI: u32 = 0;
+pub(super) const KIND_SPHERE: u32 = 1;
+pub(super) const KIND_DISK: u32 = 2;
+pub(super) const INDEX_MASK: u32 = (1 << KIND_SHIFT) - 1;
+/// Padding entry of `Geometry::prims` (never intersected).
+pub(super) const PAD: u32 = u32::MAX;

@@ -1,0 +1,262 @@
+//! The volumetric path tracer: [`World::li`], the radiance of one camera
+//! sample. Next-event estimation and shadow rays are in `direct.rs`.
+//!
+//! `volpath` (and `path`, the same code on scenes without media) follows
+//! Mitsuba 3's semantics, so both renderers converge to the same image:
+//!
+//! * `max_depth` counts scattering events in media and interactions with
+//!   non-null surfaces; crossing a `null` boundary does not count. A path
+//!   with `d` such events contributes only if `d < max_depth`, so
+//!   `max_depth = 1` shows emitters seen directly (also through media and
+//!   null boundaries), `max_depth = 2` adds single scattering and direct
+//!   lighting of surfaces; `-1` is unbounded.
+//! * Next-event estimation at every scattering event and at every
+//!   non-delta surface, combined with phase/BSDF sampling by multiple
+//!   importance sampling (power heuristic). Emitters hit by a path after a
+//!   delta surface (or directly from the camera) count fully.
+//! * Shadow rays pass through `null` boundaries and media (transmittance
+//!   estimates); any other surface blocks them.
+//! * Russian roulette once the depth exceeds `rr_depth`: survival probability
+//!   `min(max(throughput)·η², 0.95)`.
+//! * RGB throughput; media sample free flights with spectral MIS (see
+//!   [`crate::medium`]).
+
+mod direct;
+
+use crate::emitter::Emitter;
+use crate::geometry::Hit;
+use crate::math::{mis_power, Frame, Sampler, UNIFORM_SPHERE_PDF};
+use crate::medium::{DistanceEvent, SegmentStart};
+use crate::ray::{offset_point, Ray};
+use crate::spectrum::{max_comp, Spectrum};
+use crate::world::World;
+use direct::{MediumVertex, SurfaceVertex};
+
+/// What an earlier query already says about the nearest hit of a ray.
+#[derive(Debug, Clone, Copy)]
+enum Known<T> {
+    /// Nothing: the geometry must be asked.
+    Unknown,
+    /// The ray hits nothing.
+    Miss,
+    Hit(T),
+}
+
+impl World {
+    /// Radiance arriving at the camera along `ray` (one sample).
+    pub fn li(&self, mut ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
+        let mut l = Spectrum::ZERO;
+        let mut thr = Spectrum::ONE;
+        if self.max_depth == 0 {
+            return l;
+        }
+        let mut medium = self.camera_medium;
+        let mut depth = 0u32;
+        // The path so far is the camera followed by delta interactions only:
+        // emission found by continuation then counts without MIS.
+        let mut specular = true;
+        let mut prev_pdf = 1.0f32;
+        let mut prev_p = ray.o;
+        let mut eta = 1.0f32;
+        let mut start = SegmentStart::Surface;
+        let mut t_max = t_max_primary;
+        // Path-level spectral MIS (see `Medium::sample_distance_spectral`):
+        // free flights use the hero channel's pdf; `r_u` holds each channel's
+        // path pdf over the hero's, and a contribution is `thr·L / mean(r_u)`.
+        let hero = ((s.next_1d() * 3.0) as usize).min(2);
+        let mut r_u = Spectrum::ONE;
+        let mut inv_mis = 1.0f32;
+        // The nearest hit of `ray`, when a previous query already found it.
+        let mut known: Known<Hit> = Known::Unknown;
+        loop {
+            // `after`: what the query says of the ray continued through `hit`.
+            let (hit, after) = match std::mem::replace(&mut known, Known::Unknown) {
+                Known::Hit(h) => (Some(h), Known::Unknown),
+                Known::Miss => (None, Known::Unknown),
+                Known::Unknown if self.any_null => {
+                    let (h1, h2) = self.geom.intersect2(&ray, t_max);
+                    let after = match h2 {
+                        Some(r) => Known::Hit(r),
+                        None if t_max == f32::INFINITY => Known::Miss,
+                        // No second hit below a finite t_max says nothing
+                        // of what lies beyond it.
+                        None => Known::Unknown,
+                    };
+                    (h1, after)
+                }
+                Known::Unknown => (self.geom.intersect(&ray, t_max), Known::Unknown),
+            };
+            let t_surf = hit.map_or(t_max, |h| h.t);
+            if let Some(m) = medium {
+                let med = &self.media[m as usize];
+                let (ds, r) = med.sample_distance_spectral(&ray, t_surf, start, hero, s);
+                thr *= ds.weight;
+                r_u *= r;
+                // Only ratios matter: rescale thr and r_u together so that
+                // neither under- nor overflows on long paths.
+                let rm = max_comp(r_u);
+                if !(1e-4..=1e4).contains(&rm) && rm > 0.0 {
+                    r_u /= rm;
+                    thr /= rm;
+                }
+                inv_mis = 1.0 / crate::spectrum::mean(r_u);
+                if ds.event == DistanceEvent::Scatter {
+                    depth += 1;
+                    if depth >= self.max_depth || thr == Spectrum::ZERO {
+                        break;
+                    }
+                    let p = ray.at(ds.t);
+                    let phase = med.phase();
+                    // Next-event estimation from the medium vertex.
+                    let vertex = MediumVertex {
+                        p,
+                        d: ray.d,
+                        phase,
+                        medium,
+                    };
+                    if let Some((le, f, w)) = self.direct(&vertex, s) {
+                        l += thr * le * (f * w * inv_mis);
+                    }
+                    let (wo, pdf) = phase.sample(ray.d, s.next_2d());
+                    prev_pdf = pdf;
+                    prev_p = p;
+                    specular = false;
+                    ray = Ray { o: p, d: wo };
+                    start = SegmentStart::Medium;
+                    t_max = f32::INFINITY;
+                    if !self.roulette(depth, &mut thr, inv_mis, eta, s) {
+                        break;
+                    }
+                    continue;
+                }
+                if thr == Spectrum::ZERO {
+                    break;
+                }
+            }
+            t_max = f32::INFINITY;
+            let Some(h) = hit else {
+                // Escaped: the environment, if any.
+                if let Some(e) = self.env {
+                    if !(depth == 0 && self.hide_emitters) {
+                        if let Emitter::Constant { radiance } = self.emitters[e as usize] {
+                            let w = if specular {
+                                1.0
+                            } else {
+                                mis_power(prev_pdf, UNIFORM_SPHERE_PDF * self.select_pdf())
+                            };
+                            l += thr * radiance * (w * inv_mis);
+                        }
+                    }
+                }
+                break;
+            };
+            let info = self.shapes[h.shape as usize];
+            // Emission of an area light seen from its front side.
+            if let Some(e) = info.emitter {
+                if !(depth == 0 && self.hide_emitters) && h.n.dot(ray.d) < 0.0 {
+                    if let Emitter::Area { radiance, shape } = self.emitters[e as usize] {
+                        let w = if specular {
+                            1.0
+                        } else {
+                            let d2 = (h.p - prev_p).length_squared();
+                            let cos_l = -h.n.dot(ray.d);
+                            let light_pdf =
+                                self.select_pdf() * d2 / (cos_l * self.geom.areas[shape as usize]);
+                            mis_power(prev_pdf, light_pdf)
+                        };
+                        l += thr * radiance * (w * inv_mis);
+                    }
+                }
+            }
+            let bsdf = self.bsdfs[info.bsdf as usize];
+            if bsdf.is_null() {
+                // Index-matched boundary: continue straight on; a new segment starts.
+                medium = info.target_medium(h.n, ray.d, medium);
+                let o = offset_point(h.p, h.n, ray.d);
+                // The second hit of the query is the continued ray's first,
+                // if it lies ahead of the offset origin (else ask again).
+                known = match after {
+                    Known::Unknown => Known::Unknown,
+                    Known::Miss => Known::Miss,
+                    Known::Hit(h2) => {
+                        let h2 = self.geom.make_hit(&ray, h2);
+                        let t = (h2.p - o).dot(ray.d);
+                        if t > 0.0 {
+                            Known::Hit(Hit { t, ..h2 })
+                        } else {
+                            Known::Unknown
+                        }
+                    }
+                };
+                ray = Ray { o, d: ray.d };
+                start = SegmentStart::Surface;
+                continue;
+            }
+            // This interaction would be event number depth + 1: nothing it
+            // leads to can contribute unless depth + 1 < max_depth.
+            if depth + 1 >= self.max_depth {
+                break;
+            }
+            let frame = Frame::from_normal(h.ns);
+            let wi_local = frame.to_local(-ray.d);
+            if bsdf.is_smooth() {
+                // Next-event estimation from the surface.
+                let vertex = SurfaceVertex {
+                    hit: &h,
+                    info: &info,
+                    bsdf: &bsdf,
+                    frame: &frame,
+                    wi_local,
+                    medium,
+                };
+                if let Some((le, f, w)) = self.direct(&vertex, s) {
+                    l += thr * le * f * (w * inv_mis);
+                }
+            }
+            let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
+                break;
+            };
+            let wo = frame.to_world(bs.wo);
+            thr *= bs.weight;
+            eta *= bs.eta;
+            depth += 1;
+            specular = bs.delta;
+            prev_pdf = bs.pdf;
+            prev_p = h.p;
+            medium = info.target_medium(h.n, wo, medium);
+            ray = Ray {
+                o: offset_point(h.p, h.n, wo),
+                d: wo,
+            };
+            start = SegmentStart::Surface;
+            if thr == Spectrum::ZERO || !self.roulette(depth, &mut thr, inv_mis, eta, s) {
+                break;
+            }
+        }
+        l
+    }
+
+    /// `thr·inv_mis` is the path weight, the same whichever channel is the
+    /// hero, so the survival probability does not depend on the hero.
+    fn roulette(
+        &self,
+        depth: u32,
+        thr: &mut Spectrum,
+        inv_mis: f32,
+        eta: f32,
+        s: &mut Sampler,
+    ) -> bool {
+        // Like Mitsuba: roulette once the depth exceeds rr_depth.
+        if depth <= self.rr_depth {
+            return true;
+        }
+        // η² undoes the radiance scaling at refractions so that a path
+        // inside glass is not killed for a weight it will regain on exit.
+        let q = (max_comp(*thr) * inv_mis * eta * eta).min(0.95);
+        if !(q > 0.0) || s.next_1d() >= q {
+            return false;
+        }
+        *thr /= q;
+        true
+    }
+}
