@@ -56,12 +56,12 @@
 //! ```
 
 use crate::error::RenderError;
-use crate::math::mix64;
 use crate::medium::grid::GridTex;
 use crate::render::{render, RenderOptions};
 use crate::scene::desc::{
     GridFilter, GridVolumeDesc, MediumDesc, Rgb, SceneDesc, TransmittanceDesc, VolumeDesc,
 };
+use fgf_core::rng::{mix64, stream_key};
 use fgf_core::transmittance::Fgf;
 use fgf_core::Progress;
 use fgf_field::{sw_3d_for_ray_statistics, synthesize, Anchor, FieldError, Precision, SynthParams};
@@ -317,12 +317,12 @@ pub fn ensemble(
             interrupted = true;
             break;
         }
-        let base = mix64(mix64(opts.seed) ^ r as u64);
+        let base = stream_key(mix64(opts.seed), r as u64);
         let mut sc = scene.clone();
         let mut cancelled = false;
         for (k, p) in plans.iter().enumerate() {
             let mut params = p.params.clone();
-            params.seed = mix64(base ^ (0x100 + p.medium as u64));
+            params.seed = stream_key(base, 0x100 + p.medium as u64);
             let field = match synthesize(&params, &cancel_only) {
                 Ok(f) => f,
                 Err(FieldError::Cancelled(_)) => {
@@ -401,7 +401,7 @@ pub fn ensemble(
         }
         let ropts = RenderOptions {
             spp: opts.spp,
-            seed: Some(mix64(base ^ 0x5EED)),
+            seed: Some(stream_key(base, 0x5EED)),
             variance: false,
             spp_per_pass: None,
         };

@@ -4,19 +4,11 @@
 //! Sampling routines take their uniform variates `u ∈ [0,1)` as arguments
 //! and come with their pdf (pbrt-v4's habit), so they can be tested alone.
 
+use fgf_core::rng::{mix64, stream_key, SECOND_WORD};
 use glam::Vec3;
 use rand::RngCore;
 use rand_pcg::Pcg32;
 use std::f32::consts::PI;
-
-/// SplitMix64 finaliser: a bijective 64-bit mixer used to derive stream seeds.
-#[inline]
-pub fn mix64(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
 
 /// The random stream of one camera sample. It is derived from
 /// `(seed, pixel index, sample index)` only, so an image does not depend on
@@ -41,18 +33,18 @@ impl Sampler {
 
     #[inline]
     pub fn pixel_key(seed_key: u64, pixel: u64) -> u64 {
-        // Chained mixing (not xor of independent hashes) so that the triples
-        // (a, b, c) and (b, a, c) give unrelated streams.
-        mix64(seed_key ^ pixel)
+        // Chained keys (docs/theory.md §7.15): (a, b, c) and (b, a, c) give
+        // unrelated streams.
+        stream_key(seed_key, pixel)
     }
 
     #[inline]
     pub fn for_sample(pixel_key: u64, sample: u64) -> Self {
-        let h = mix64(pixel_key ^ sample);
+        let h = stream_key(pixel_key, sample);
         // PCG's stream selector is also hashed so neighbouring pixels do not
         // get the related increments that nearby stream ids would give.
         Sampler {
-            rng: Pcg32::new(h, mix64(h ^ 0x5851_F42D_4C95_7F2D)),
+            rng: Pcg32::new(h, stream_key(h, SECOND_WORD)),
         }
     }
 
