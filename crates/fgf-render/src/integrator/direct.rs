@@ -205,6 +205,12 @@ impl World {
         }
         let ray = Ray { o, d };
         let mut tr = Spectrum::ONE;
+        // Transmittance of medium `m` over [t0, t1].
+        let segment = |m: u32, start, t0: f32, t1: f32, s: &mut Sampler| {
+            let seg = Ray { o: ray.at(t0), d };
+            let t_seg = (t1 - t0).max(0.0);
+            self.media[m as usize].transmittance(&seg, t_seg, start, SegmentEnd::Surface, s)
+        };
         // Distance and primitive of the last crossing handled: a resumed
         // query skips everything up to it, in (t, primitive) order.
         let mut done = (0.0f32, 0u32);
@@ -240,36 +246,23 @@ impl World {
             if !open {
                 return Spectrum::ZERO;
             }
-            // Segments [done.0, x.t] for each crossing x, then (if all
+            // Segments [done.0, t] up to each crossing, then (if all
             // crossings are in hand) the last one up to t_end.
-            let last = (!more).then_some(None);
-            for x in xs[..len].iter().map(Some).chain(last) {
+            for &(t, prim, shape, n) in &xs[..len] {
                 if let Some(m) = medium {
-                    let t_next = x.map_or(t_end, |x| x.0);
-                    let seg = Ray {
-                        o: ray.at(done.0),
-                        d,
-                    };
-                    let t_seg = (t_next - done.0).max(0.0);
-                    tr *= self.media[m as usize].transmittance(
-                        &seg,
-                        t_seg,
-                        start,
-                        SegmentEnd::Surface,
-                        s,
-                    );
+                    tr *= segment(m, start, done.0, t, s);
                     if tr == Spectrum::ZERO {
                         return tr;
                     }
                 }
-                let Some(&(t, prim, shape, n)) = x else {
-                    break;
-                };
                 medium = self.shapes[shape as usize].target_medium(n, d, medium);
                 start = SegmentStart::Surface;
                 done = (t, prim);
             }
             if !more {
+                if let Some(m) = medium {
+                    tr *= segment(m, start, done.0, t_end, s);
+                }
                 return tr;
             }
         }
