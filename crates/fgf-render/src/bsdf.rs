@@ -19,7 +19,7 @@
 //! ```
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere, Spectrum};
-use crate::scene::desc::BsdfDesc;
+use fgf_scene::BsdfDesc;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 

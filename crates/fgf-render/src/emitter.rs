@@ -19,7 +19,7 @@
 
 use crate::geometry::Geometry;
 use crate::math::{rgb, sample_uniform_sphere, Spectrum, UNIFORM_SPHERE_PDF};
-use crate::scene::desc::EmitterDesc;
+use fgf_scene::EmitterDesc;
 use glam::{Mat3, Vec3};
 
 #[derive(Debug, Clone, Copy)]

@@ -17,7 +17,7 @@
 //!   not bias the result.
 
 use crate::math::Sampler;
-use crate::scene::desc::FilterDesc;
+use fgf_scene::FilterDesc;
 
 const GAUSS_BINS: usize = 1024;
 

@@ -27,7 +27,7 @@ use crate::geometry::{offset_point, shadow_epsilon, Geometry, Hit, Ray};
 use crate::math::{max_comp, mis_power, Frame, Sampler, Spectrum, UNIFORM_SPHERE_PDF};
 use crate::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
 use crate::render::RenderError;
-use crate::scene::desc::{IntegratorKind, SceneDesc};
+use fgf_scene::{IntegratorKind, SceneDesc};
 use glam::Vec3;
 
 /// Null-boundary crossings a shadow ray keeps per query (see
@@ -140,7 +140,7 @@ impl World {
         }
         let mut env = None;
         for e in &desc.emitters {
-            if let crate::scene::desc::EmitterDesc::Area { .. } = e {
+            if let fgf_scene::EmitterDesc::Area { .. } = e {
                 return Err(RenderError::InvalidScene(
                     "an area emitter must be attached to a shape".into(),
                 ));

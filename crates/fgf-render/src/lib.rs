@@ -4,16 +4,14 @@
 //! format, with classical (homogeneous, grid) and non-exponential (FGF,
 //! Bitterli 2018) media.
 //!
-//! * [`scene::desc`]: the plain-data scene description. The XML loader
-//!   produces it; the renderer consumes it. It is the only contract between
-//!   the two halves.
-//! * [`scene::xml`]: the Mitsuba 3 XML loader.
+//! The renderer consumes a [`fgf_scene::SceneDesc`], the plain-data scene
+//! description of the `fgf-scene` crate (which also holds its validator and
+//! the XML loader): that description is the only contract between the two.
+//!
 //! * [`render`](mod@render): the renderer's entry point, from a `SceneDesc` to pixels;
 //!   [`integrator`] (volumetric path tracing), [`medium`] (the medium
 //!   interface, homogeneous and grid media), [`geometry`] (shapes, BVH),
 //!   [`bsdf`], [`emitter`], [`phase`], [`camera`], [`film`], [`math`].
-
-pub mod scene;
 
 pub mod bsdf;
 pub mod camera;

@@ -12,7 +12,7 @@
 //!
 //! ```no_run
 //! use fgf_render::render::{render, RenderOptions};
-//! let scene = fgf_render::scene::xml::load_file("scene.xml".as_ref(), &[]).unwrap();
+//! let scene = fgf_scene::load_file("scene.xml".as_ref(), &[]).unwrap();
 //! let out = render(&scene, &RenderOptions::default(), &fgf_core::NoProgress).unwrap();
 //! fgf_io::image::write_exr("out.exr".as_ref(), out.width, out.height, 3, &out.image).unwrap();
 //! ```
@@ -20,8 +20,8 @@
 use crate::film::Filter;
 use crate::integrator::World;
 use crate::math::Sampler;
-use crate::scene::desc::SceneDesc;
 use fgf_core::Progress;
+use fgf_scene::SceneDesc;
 use rayon::prelude::*;
 
 /// Errors of the renderer (scene errors found when compiling the scene, and

@@ -4,7 +4,7 @@
 
 use fgf_render::ensemble::{ensemble, EnsembleOptions};
 use fgf_render::render::{render, RenderError, RenderOptions};
-use fgf_render::scene::desc::SceneDesc;
+use fgf_scene::SceneDesc;
 
 fn scene(medium: &str, scale: &str) -> SceneDesc {
     let xml = format!(
@@ -28,7 +28,7 @@ fn scene(medium: &str, scale: &str) -> SceneDesc {
     <emitter type="constant"><rgb name="radiance" value="1"/></emitter>
 </scene>"#
     );
-    fgf_render::scene::xml::load_str(&xml, "ens.xml", std::path::Path::new("."), &[])
+    fgf_scene::load_str(&xml, "ens.xml", std::path::Path::new("."), &[])
         .unwrap_or_else(|e| panic!("{e}"))
 }
 

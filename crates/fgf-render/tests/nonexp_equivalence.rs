@@ -9,9 +9,9 @@
 
 use fgf_core::transmittance::Fgf;
 use fgf_render::render::{render, RenderOptions, RenderOutput};
-use fgf_render::scene::desc::SceneDesc;
+use fgf_scene::SceneDesc;
 
-/// The reference cube scene (`../shared/scenes/cube-homogeneous.xml`),
+/// The reference cube scene (`scenes/reference/cube-homogeneous.xml`),
 /// small: a medium cube over a diffuse ground, lit from the side.
 fn scene(medium: &str) -> SceneDesc {
     let xml = format!(
@@ -39,7 +39,7 @@ fn scene(medium: &str) -> SceneDesc {
     </shape>
 </scene>"#
     );
-    fgf_render::scene::xml::load_str(&xml, "cube.xml", std::path::Path::new("."), &[])
+    fgf_scene::load_str(&xml, "cube.xml", std::path::Path::new("."), &[])
         .unwrap_or_else(|e| panic!("{e}"))
 }
 

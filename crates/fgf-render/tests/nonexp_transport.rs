@@ -22,7 +22,7 @@ use fgf_render::geometry::Ray;
 use fgf_render::integrator::World;
 use fgf_render::math::{sample_uniform_sphere, Sampler, Spectrum};
 use fgf_render::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
-use fgf_render::scene::desc::{MediumDesc, SceneDesc};
+use fgf_scene::{MediumDesc, SceneDesc};
 use glam::Vec3;
 
 const Z: f64 = 4.5;
@@ -90,7 +90,7 @@ fn scene(body: &str) -> SceneDesc {
         {body}
         </scene>"#
     );
-    fgf_render::scene::xml::load_str(&xml, "test.xml", std::path::Path::new("."), &[])
+    fgf_scene::load_str(&xml, "test.xml", std::path::Path::new("."), &[])
         .unwrap_or_else(|e| panic!("{e}\n{xml}"))
 }
 
@@ -132,7 +132,7 @@ fn assert_close(label: &str, mean: [f64; 3], se: [f64; 3], expected: [f64; 3]) {
 
 /// The model a scene medium uses in channel `c` (for analytic targets).
 fn model_of(d: &MediumDesc, c: usize) -> Model {
-    use fgf_render::scene::desc::TransmittanceDesc as T;
+    use fgf_scene::TransmittanceDesc as T;
     let MediumDesc::NonExponential { sigma_t, model, .. } = d else {
         panic!("not non-exponential")
     };
@@ -569,9 +569,7 @@ fn camera_inside_a_medium_renders_the_furnace() {
                 <shape type="sphere"><float name="radius" value="2"/><bsdf type="null"/><ref name="interior" id="m"/></shape>
                 </scene>"#
             );
-            let sc =
-                fgf_render::scene::xml::load_str(&xml, "t.xml", std::path::Path::new("."), &[])
-                    .unwrap();
+            let sc = fgf_scene::load_str(&xml, "t.xml", std::path::Path::new("."), &[]).unwrap();
             let opts = fgf_render::RenderOptions {
                 seed: Some(3),
                 variance: true,

@@ -13,8 +13,8 @@
 
 use fgf_core::{NoProgress, Progress};
 use fgf_io::vol::VolGrid;
-use fgf_render::scene::desc::*;
 use fgf_render::{render, RenderOptions};
+use fgf_scene::*;
 use glam::{Mat4, Vec3};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -397,13 +397,13 @@ fn max_depth_one_shows_only_direct_emission() {
 
 fn reference_scene(name: &str, res: u32, spp: u32) -> SceneDesc {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes")
+        .join("../../scenes/reference")
         .join(name);
     let defines = [
         ("res".to_string(), res.to_string()),
         ("spp".to_string(), spp.to_string()),
     ];
-    fgf_render::scene::load_file(&path, &defines).unwrap_or_else(|e| panic!("{e}"))
+    fgf_scene::load_file(&path, &defines).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// Bit-identical images for 1 and 2 threads.

@@ -14,8 +14,8 @@
 pub mod bvh;
 
 use crate::render::RenderError;
-use crate::scene::desc::{GeometryDesc, ShapeDesc};
 use bvh::{Aabb, Bvh};
+use fgf_scene::{GeometryDesc, ShapeDesc};
 use glam::{Affine3A, Mat3, Mat4, Vec3, Vec3A, Vec4};
 use std::f32::consts::PI;
 
@@ -865,7 +865,7 @@ fn disk_root(d: &Disk, ray: &Ray) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::desc::TriangleMesh;
+    use fgf_scene::TriangleMesh;
     use std::sync::Arc;
 
     /// A shape with BSDF 0 and no emitter or media.

@@ -33,7 +33,7 @@ use crate::geometry::Ray;
 use crate::math::{mean, Sampler, Spectrum};
 use crate::phase::Phase;
 use crate::render::RenderError;
-use crate::scene::desc::{GridFilter, GridVolumeDesc, VolumeDesc};
+use fgf_scene::{GridFilter, GridVolumeDesc, VolumeDesc};
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 

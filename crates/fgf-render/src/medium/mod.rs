@@ -56,7 +56,7 @@ use crate::geometry::Ray;
 use crate::math::{Sampler, Spectrum};
 use crate::phase::Phase;
 use crate::render::RenderError;
-use crate::scene::desc::{MediumDesc, VolumeDesc};
+use fgf_scene::{MediumDesc, VolumeDesc};
 
 /// How the current free-flight segment started (`theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -104,8 +104,8 @@ use crate::math::{Sampler, Spectrum};
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
 use crate::render::RenderError;
-use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model};
+use fgf_scene::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use glam::{Affine3A, DVec3, Vec3};
 
 /// A non-exponential medium; see the module docs.

@@ -19,7 +19,7 @@
 
 use super::document::XNode;
 use super::props::{parse_list, xyz_or_value};
-use crate::scene::error::SceneError;
+use crate::error::SceneError;
 use glam::{DMat4, DVec3, DVec4};
 
 /// Mitsuba 3.9's rotation matrix about `a` by `theta` radians, with `a` used

@@ -87,10 +87,10 @@
 //! ```
 
 use super::document::XNode;
-use super::plugins::{check_object_attrs, rgb, shape_bbox, to_invertible_mat4, Ctx};
+use super::plugins::{check_object_attrs, rgb, to_invertible_mat4, Ctx};
 use super::props::{check, Entry, Props};
-use crate::scene::desc::*;
-use crate::scene::error::{SceneError, SceneErrorKind};
+use crate::desc::*;
+use crate::error::{SceneError, SceneErrorKind};
 use fgf_core::stats::{Regime, HURST_RANGE};
 use fgf_core::transmittance::{Davis, DavisWeinstein, Fgf};
 use glam::{DVec3, Mat4};
@@ -620,7 +620,7 @@ pub(crate) fn resolve_default_lengths(
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for s in shapes.iter().filter(|s| s.interior == Some(i)) {
-            let (a, b) = shape_bbox(s);
+            let (a, b) = s.world_bbox();
             lo = lo.min(a);
             hi = hi.max(b);
         }

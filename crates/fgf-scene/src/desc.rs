@@ -7,7 +7,7 @@
 //! Matrices are `glam::Mat4` (column-major in memory, `M * p` convention);
 //! a `to_world` maps the plugin's local space to world space.
 
-use glam::{Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3};
 use std::sync::Arc;
 
 pub type Rgb = [f32; 3];
@@ -129,6 +129,50 @@ pub struct ShapeDesc {
     pub emitter: Option<EmitterDesc>,
     pub interior: Option<MediumId>,
     pub exterior: Option<MediumId>,
+}
+
+impl ShapeDesc {
+    /// World-space bounding box (conservative for disks), in f64. The
+    /// loader's default `length` of a k-fBm medium and the ensemble's
+    /// realization grid are both taken from it.
+    pub fn world_bbox(&self) -> (DVec3, DVec3) {
+        let m = self.to_world.as_dmat4();
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut add = |p: DVec3| {
+            let q = m.transform_point3(p);
+            lo = lo.min(q);
+            hi = hi.max(q);
+        };
+        let corners = |a: DVec3, b: DVec3, add: &mut dyn FnMut(DVec3)| {
+            for i in 0..8 {
+                add(DVec3::new(
+                    if i & 1 == 0 { a.x } else { b.x },
+                    if i & 2 == 0 { a.y } else { b.y },
+                    if i & 4 == 0 { a.z } else { b.z },
+                ));
+            }
+        };
+        match &self.geometry {
+            GeometryDesc::Cube => corners(DVec3::splat(-1.0), DVec3::splat(1.0), &mut add),
+            GeometryDesc::Rectangle | GeometryDesc::Disk => corners(
+                DVec3::new(-1.0, -1.0, 0.0),
+                DVec3::new(1.0, 1.0, 0.0),
+                &mut add,
+            ),
+            GeometryDesc::Sphere { center, radius } => {
+                let c = center.as_dvec3();
+                let r = DVec3::splat(*radius as f64);
+                corners(c - r, c + r, &mut add)
+            }
+            GeometryDesc::Mesh(mesh) => {
+                for p in &mesh.positions {
+                    add(p.as_dvec3());
+                }
+            }
+        }
+        (lo, hi)
+    }
 }
 
 #[derive(Debug, Clone, PartialEq)]

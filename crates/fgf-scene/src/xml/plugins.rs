@@ -51,8 +51,8 @@ use super::media;
 use super::mesh;
 use super::props::{check, Entry, Props, OBJECT_TAGS};
 use super::tables;
-use crate::scene::desc::*;
-use crate::scene::error::SceneError;
+use crate::desc::*;
+use crate::error::SceneError;
 use glam::{DMat4, DVec3, Mat4, Vec3};
 use std::collections::HashMap;
 use std::sync::Arc;
@@ -184,7 +184,7 @@ pub(crate) fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, Sc
         None => {
             if !ctx.media.is_empty() {
                 return Err(SceneError::new(
-                    crate::scene::error::SceneErrorKind::Invalid,
+                    crate::error::SceneErrorKind::Invalid,
                     source,
                     "the scene has participating media but no <integrator>; Mitsuba's default integrator 'path' ignores media: add <integrator type=\"volpath\"/>",
                 ));
@@ -701,46 +701,6 @@ fn default_bsdf(ctx: &mut Ctx, emits: bool) -> BsdfId {
         });
         ctx.bsdfs.len() - 1
     })
-}
-
-/// World-space bounding box of a shape (conservative for disks), in f64.
-pub(crate) fn shape_bbox(s: &ShapeDesc) -> (DVec3, DVec3) {
-    let m = s.to_world.as_dmat4();
-    let mut lo = DVec3::splat(f64::INFINITY);
-    let mut hi = DVec3::splat(f64::NEG_INFINITY);
-    let mut add = |p: DVec3| {
-        let q = m.transform_point3(p);
-        lo = lo.min(q);
-        hi = hi.max(q);
-    };
-    let corners = |a: DVec3, b: DVec3, add: &mut dyn FnMut(DVec3)| {
-        for i in 0..8 {
-            add(DVec3::new(
-                if i & 1 == 0 { a.x } else { b.x },
-                if i & 2 == 0 { a.y } else { b.y },
-                if i & 4 == 0 { a.z } else { b.z },
-            ));
-        }
-    };
-    match &s.geometry {
-        GeometryDesc::Cube => corners(DVec3::splat(-1.0), DVec3::splat(1.0), &mut add),
-        GeometryDesc::Rectangle | GeometryDesc::Disk => corners(
-            DVec3::new(-1.0, -1.0, 0.0),
-            DVec3::new(1.0, 1.0, 0.0),
-            &mut add,
-        ),
-        GeometryDesc::Sphere { center, radius } => {
-            let c = center.as_dvec3();
-            let r = DVec3::splat(*radius as f64);
-            corners(c - r, c + r, &mut add)
-        }
-        GeometryDesc::Mesh(mesh) => {
-            for p in &mesh.positions {
-                add(p.as_dvec3());
-            }
-        }
-    }
-    (lo, hi)
 }
 
 // --------------------------------------------------------------------- BSDFs

@@ -1,13 +1,13 @@
-//! Mitsuba 3 XML loader (issue 4): XML -> [`super::desc::SceneDesc`].
+//! Mitsuba 3 XML loader (issue 4): XML -> [`crate::desc::SceneDesc`].
 //!
 //! ```no_run
 //! use std::path::Path;
-//! let scene = fgf_render::scene::load_file(
+//! let scene = fgf_scene::load_file(
 //!     Path::new("scene.xml"),
 //!     &[("spp".to_string(), "16".to_string())],
 //! )?;
 //! println!("{}x{} at {} spp", scene.sensor.width, scene.sensor.height, scene.sensor.spp);
-//! # Ok::<(), fgf_render::scene::SceneError>(())
+//! # Ok::<(), fgf_scene::SceneError>(())
 //! ```
 //!
 //! # The subset
@@ -52,8 +52,8 @@ pub(crate) mod props;
 pub(crate) mod tables;
 pub(crate) mod transform;
 
-use super::desc::SceneDesc;
-use super::error::{SceneError, SceneErrorKind};
+use crate::desc::SceneDesc;
+use crate::error::{SceneError, SceneErrorKind};
 use std::path::Path;
 
 /// Load a scene file. `defines` override `<default>` values (`-D spp=256`).

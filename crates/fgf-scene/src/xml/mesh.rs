@@ -23,8 +23,8 @@
 //! `n_world`.
 
 use super::document::XNode;
-use crate::scene::desc::TriangleMesh;
-use crate::scene::error::{SceneError, SceneErrorKind};
+use crate::desc::TriangleMesh;
+use crate::error::{SceneError, SceneErrorKind};
 use glam::{Mat3, Mat4, Vec3};
 use std::collections::HashMap;
 use std::path::Path;

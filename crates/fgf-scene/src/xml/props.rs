@@ -7,7 +7,7 @@
 
 use super::document::XNode;
 use super::transform;
-use crate::scene::error::SceneError;
+use crate::error::SceneError;
 use glam::DMat4;
 use std::cell::Cell;
 use std::collections::HashMap;
