@@ -1,0 +1,220 @@
+//! `<bsdf>`.
+//!
+//! | element | types | parameters (default) |
+//! |---|---|---|
+//! | `bsdf` | `diffuse`, `null`, `dielectric`, `conductor`, `twosided` | diffuse `reflectance` (0.5, in \[0, 1\]); dielectric `int_ior` ("bk7"), `ext_ior` ("air"), numbers > 0 or names from Mitsuba's table, `specular_reflectance` (1), `specular_transmittance` (1); conductor `material` ("none" = perfect mirror, or a Mitsuba name such as "Au") or `eta` (0) and `k` (1), `specular_reflectance` (1); twosided: one nested BSDF. |
+
+use super::context::{check_object_attrs, plugin_type, rgb, Ctx};
+use super::document::XNode;
+use super::props::{check, Entry, Props};
+use super::tables;
+use crate::desc::*;
+use crate::error::SceneError;
+
+/// The BSDF of a shape without one, as Mitsuba 3.9's `Shape` constructor
+/// chooses it: a diffuse BSDF of reflectance 0.5, except on a shape with an
+/// (area) emitter, which gets reflectance 0 so that a light source does not
+/// also reflect light. All such shapes share one entry per kind.
+pub(crate) fn default_bsdf(ctx: &mut Ctx, emits: bool) -> BsdfId {
+    let (slot, reflectance) = if emits {
+        (&mut ctx.default_emitter_bsdf, 0.0)
+    } else {
+        (&mut ctx.default_bsdf, 0.5)
+    };
+    *slot.get_or_insert_with(|| {
+        ctx.bsdfs.push(BsdfDesc::Diffuse {
+            reflectance: [reflectance; 3],
+        });
+        ctx.bsdfs.len() - 1
+    })
+}
+
+const BSDFS: &[&str] = &["diffuse", "null", "dielectric", "conductor", "twosided"];
+
+/// A BSDF reference or nested BSDF, as an index (shared for the same id).
+pub(crate) fn bsdf_ref<'a>(ctx: &mut Ctx<'a>, e: &Entry<'a>) -> Result<BsdfId, SceneError> {
+    bsdf_id(ctx, e.target)
+}
+
+pub(crate) fn bsdf_id<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<BsdfId, SceneError> {
+    if let Some(id) = n.attr("id") {
+        if let Some(&i) = ctx.bsdf_by_id.get(id) {
+            return Ok(i);
+        }
+    }
+    let d = bsdf_desc(ctx, n, 0)?;
+    ctx.bsdfs.push(d);
+    let i = ctx.bsdfs.len() - 1;
+    if let Some(id) = n.attr("id") {
+        ctx.bsdf_by_id.insert(id.to_string(), i);
+    }
+    Ok(i)
+}
+
+fn ior(e: &Entry) -> Result<f64, SceneError> {
+    let name = e.name.unwrap_or("?");
+    if e.node.tag == "string" {
+        let s = e.string()?;
+        return tables::IOR
+            .iter()
+            .find(|(k, _)| *k == s)
+            .map(|(_, v)| *v)
+            .ok_or_else(|| {
+                e.node.err(format!(
+                    "unknown material '{s}' for {name} (give a number > 0 or one of: {})",
+                    tables::IOR
+                        .iter()
+                        .map(|(k, _)| *k)
+                        .collect::<Vec<_>>()
+                        .join(", ")
+                ))
+            });
+    }
+    let v = e.float()?;
+    check(
+        e.node,
+        name,
+        v,
+        v > 0.0,
+        "a number > 0 or a material name such as \"bk7\"",
+    )
+}
+
+fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDesc, SceneError> {
+    check_object_attrs(n)?;
+    let ty = plugin_type(n, "BSDF", BSDFS)?;
+    if let Some(id) = n.attr("id") {
+        if ctx.resolving.iter().any(|r| r == id) {
+            return Err(n.err(format!("reference cycle through id '{id}'")));
+        }
+    }
+    let known: &'static [&'static str] = match ty {
+        "diffuse" => &["reflectance"],
+        "dielectric" => &[
+            "int_ior",
+            "ext_ior",
+            "specular_reflectance",
+            "specular_transmittance",
+        ],
+        "conductor" => &["material", "eta", "k", "specular_reflectance"],
+        _ => &[],
+    };
+    let p = Props::new(n, &ctx.ids, known)?;
+    let unit = |v: f64| (0.0..=1.0).contains(&v);
+    let d = match ty {
+        "diffuse" => BsdfDesc::Diffuse {
+            reflectance: rgb(p.color_in("reflectance", [0.5; 3], unit, "in [0, 1]")?),
+        },
+        "null" => BsdfDesc::Null,
+        "dielectric" => {
+            let int_ior = match p.take("int_ior") {
+                Some(e) => ior(e)?,
+                None => 1.5046,
+            };
+            let ext_ior = match p.take("ext_ior") {
+                Some(e) => ior(e)?,
+                None => 1.000277,
+            };
+            BsdfDesc::Dielectric {
+                int_ior: int_ior as f32,
+                ext_ior: ext_ior as f32,
+                specular_reflectance: rgb(p.color_in(
+                    "specular_reflectance",
+                    [1.0; 3],
+                    unit,
+                    "in [0, 1]",
+                )?),
+                specular_transmittance: rgb(p.color_in(
+                    "specular_transmittance",
+                    [1.0; 3],
+                    unit,
+                    "in [0, 1]",
+                )?),
+            }
+        }
+        "conductor" => {
+            let material = p.string("material")?;
+            let eta = p.color("eta")?;
+            let k = p.color("k")?;
+            let (eta, k) = match material {
+                Some((m, mnode)) if m != "none" => {
+                    if eta.is_some() || k.is_some() {
+                        return Err(mnode.err("give either 'material' or 'eta'/'k', not both"));
+                    }
+                    let (_, e, k) = tables::CONDUCTORS
+                        .iter()
+                        .find(|(name, _, _)| *name == m)
+                        .ok_or_else(|| {
+                            mnode.err(format!(
+                                "unknown conductor material '{m}' (valid: none, {})",
+                                tables::CONDUCTORS
+                                    .iter()
+                                    .map(|(k, _, _)| *k)
+                                    .collect::<Vec<_>>()
+                                    .join(", ")
+                            ))
+                        })?;
+                    (*e, *k)
+                }
+                _ => {
+                    let nonneg = |v: Option<([f64; 3], &XNode)>, name: &str, def: f64| match v {
+                        None => Ok([def; 3]),
+                        Some((c, node)) => {
+                            if c.iter().all(|&x| x >= 0.0) {
+                                Ok(c)
+                            } else {
+                                Err(node.err(format!(
+                                    "invalid {name} = ({}, {}, {}) (valid: each channel >= 0)",
+                                    c[0], c[1], c[2]
+                                )))
+                            }
+                        }
+                    };
+                    // Mitsuba's defaults eta = 0, k = 1: a perfect mirror.
+                    (nonneg(eta, "eta", 0.0)?, nonneg(k, "k", 1.0)?)
+                }
+            };
+            BsdfDesc::Conductor {
+                eta: rgb(eta),
+                k: rgb(k),
+                specular_reflectance: rgb(p.color_in(
+                    "specular_reflectance",
+                    [1.0; 3],
+                    unit,
+                    "in [0, 1]",
+                )?),
+                perfect_mirror: eta == [0.0; 3] && k == [1.0; 3],
+            }
+        }
+        _ => {
+            let nested = p.take_objects("bsdf");
+            match nested.len() {
+                1 => {}
+                0 => return Err(n.err("twosided needs one nested BSDF")),
+                _ => {
+                    return Err(nested[1].node.err(
+                        "twosided with two different BSDFs (front/back) is not supported; give one nested BSDF",
+                    ))
+                }
+            }
+            let target = nested[0].target;
+            if target.attr("type") == Some("twosided") {
+                return Err(nested[0].node.err("twosided BSDFs cannot be nested"));
+            }
+            if depth > 4 {
+                return Err(n.err("BSDFs nested too deep"));
+            }
+            let pushed = n
+                .attr("id")
+                .map(|id| ctx.resolving.push(id.to_string()))
+                .is_some();
+            let inner = bsdf_desc(ctx, target, depth + 1);
+            if pushed {
+                ctx.resolving.pop();
+            }
+            BsdfDesc::TwoSided(Box::new(inner?))
+        }
+    };
+    p.finish()?;
+    Ok(d)
+}

@@ -1,0 +1,116 @@
+//! `<emitter>`.
+//!
+//! | element | types | parameters (default) |
+//! |---|---|---|
+//! | `emitter` | `area` (in a shape), `point`, `spot`, `directional`, `constant` | area `radiance` (1); point `intensity` (1), `position` or `to_world`; spot `intensity` (1), `to_world`, `cutoff_angle` (20°, in (0, 180)), `beam_width` (0.75·cutoff, in [0, cutoff]); directional `irradiance` (1), `direction` or `to_world` (local +z); constant `radiance` (1). Colours ≥ 0. |
+
+use super::context::{check_object_attrs, plugin_type, rgb, to_invertible_mat4, to_mat4, Ctx};
+use super::document::XNode;
+use super::props::Props;
+use crate::desc::*;
+use crate::error::SceneError;
+use glam::{DVec3, Mat4, Vec3};
+
+pub(crate) fn emitter_desc(
+    ctx: &Ctx,
+    n: &XNode,
+    on_shape: bool,
+) -> Result<EmitterDesc, SceneError> {
+    check_object_attrs(n)?;
+    let ty = if on_shape {
+        let ty = n.req_attr("type")?;
+        if ty != "area" {
+            return Err(n.err(format!(
+                "emitter type '{ty}' cannot be attached to a shape (only 'area'); put it at the top level"
+            )));
+        }
+        ty
+    } else {
+        let ty = plugin_type(
+            n,
+            "emitter",
+            &["area", "point", "spot", "directional", "constant"],
+        )?;
+        if ty == "area" {
+            return Err(n.err("an 'area' emitter must be nested inside the <shape> that emits"));
+        }
+        ty
+    };
+    let known: &'static [&'static str] = match ty {
+        "area" | "constant" => &["radiance"],
+        "point" => &["intensity", "position", "to_world"],
+        "spot" => &["intensity", "to_world", "cutoff_angle", "beam_width"],
+        _ => &["irradiance", "direction", "to_world"],
+    };
+    let p = Props::new(n, &ctx.ids, known)?;
+    let nonneg = |v: f64| v >= 0.0;
+    let d = match ty {
+        "area" => EmitterDesc::Area {
+            radiance: rgb(p.color_in("radiance", [1.0; 3], nonneg, ">= 0")?),
+        },
+        "constant" => EmitterDesc::Constant {
+            radiance: rgb(p.color_in("radiance", [1.0; 3], nonneg, ">= 0")?),
+        },
+        "point" => {
+            let intensity = rgb(p.color_in("intensity", [1.0; 3], nonneg, ">= 0")?);
+            let position = match (p.vec3("position")?, p.transform("to_world")?) {
+                (Some(_), Some((_, node))) => {
+                    return Err(node.err("give either 'position' or 'to_world', not both"))
+                }
+                (Some((v, _)), None) => DVec3::from(v).as_vec3(),
+                (None, Some((m, node))) => to_mat4(node, m)?.transform_point3(Vec3::ZERO),
+                (None, None) => Vec3::ZERO,
+            };
+            EmitterDesc::Point {
+                position,
+                intensity,
+            }
+        }
+        "spot" => {
+            let intensity = rgb(p.color_in("intensity", [1.0; 3], nonneg, ">= 0")?);
+            let to_world = match p.transform("to_world")? {
+                Some((m, node)) => to_invertible_mat4(node, m)?,
+                None => Mat4::IDENTITY,
+            };
+            let cutoff = p.float_in(
+                "cutoff_angle",
+                20.0,
+                |v| v > 0.0 && v < 180.0,
+                "0 < cutoff_angle < 180 degrees",
+            )?;
+            let beam = p.float_in(
+                "beam_width",
+                0.75 * cutoff,
+                |v| v >= 0.0 && v <= cutoff,
+                "0 <= beam_width <= cutoff_angle degrees",
+            )?;
+            EmitterDesc::Spot {
+                to_world,
+                intensity,
+                cutoff_angle: cutoff as f32,
+                beam_width: beam as f32,
+            }
+        }
+        _ => {
+            let irradiance = rgb(p.color_in("irradiance", [1.0; 3], nonneg, ">= 0")?);
+            let dir = match (p.vec3("direction")?, p.transform("to_world")?) {
+                (Some(_), Some((_, node))) => {
+                    return Err(node.err("give either 'direction' or 'to_world', not both"))
+                }
+                (Some((v, node)), None) => (DVec3::from(v), node),
+                (None, Some((m, node))) => (m.transform_vector3(DVec3::Z), node),
+                (None, None) => (DVec3::Z, n),
+            };
+            let len = dir.0.length();
+            if len == 0.0 || !len.is_finite() {
+                return Err(dir.1.err("the light direction is zero"));
+            }
+            EmitterDesc::Directional {
+                direction: (dir.0 / len).as_vec3(),
+                irradiance,
+            }
+        }
+    };
+    p.finish()?;
+    Ok(d)
+}

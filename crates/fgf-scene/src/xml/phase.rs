@@ -1,0 +1,40 @@
+//! Phase functions.
+//!
+//! Phase functions: `isotropic`; `hg` with `g` (0.8, in (-1, 1)).
+
+use super::context::{check_object_attrs, Ctx};
+use super::props::Props;
+use crate::desc::*;
+use crate::error::SceneError;
+
+pub(crate) fn phase_of(ctx: &Ctx, p: &Props) -> Result<PhaseDesc, SceneError> {
+    let phases = p.take_objects("phase");
+    if phases.len() > 1 {
+        return Err(phases[1].node.err("a medium takes one phase function"));
+    }
+    let Some(e) = phases.first() else {
+        return Ok(PhaseDesc::Isotropic);
+    };
+    let n = e.target;
+    check_object_attrs(n)?;
+    let ty = n.attr("type").unwrap_or("");
+    let known: &'static [&'static str] = match ty {
+        "isotropic" => &[],
+        "hg" => &["g"],
+        _ => {
+            return Err(n.err(format!(
+                "unknown phase function type '{ty}' (supported: isotropic, hg)"
+            )))
+        }
+    };
+    let q = Props::new(n, &ctx.ids, known)?;
+    let d = if ty == "hg" {
+        PhaseDesc::Hg {
+            g: q.float_in("g", 0.8, |g| g > -1.0 && g < 1.0, "-1 < g < 1")? as f32,
+        }
+    } else {
+        PhaseDesc::Isotropic
+    };
+    q.finish()?;
+    Ok(d)
+}

@@ -1,0 +1,268 @@
+//! `<sensor>` with its `<film>`, `<sampler>` and `<rfilter>`.
+//!
+//! | element | types | parameters (default) |
+//! |---|---|---|
+//! | `sensor` | `perspective` | `fov` (degrees, 0 < fov < 180) or `focal_length` (`"50mm"`, 35 mm film equivalent, the default), `fov_axis` (`x`, `y`, `smaller`, `larger`; `x`), `near_clip` (0.01), `far_clip` (10000), `to_world` (rigid); nested `sampler`, `film` and one `medium` (the camera's). |
+//! | `sampler` | `independent` | `sample_count` (4, ≥ 1), `seed` (0, ≥ 0) |
+//! | `film` | `hdrfilm` | `width` (768), `height` (576): 1..=65536 each and at most 2^26 pixels; `pixel_format` (`rgb`, `rgba`); `component_format` and `file_format` accepted and ignored (output is float32 EXR); cropping is not supported; nested `rfilter`. |
+//! | `rfilter` | `box`, `gaussian`, `tent` | gaussian `stddev` (0.5, > 0); tent `radius` (1, > 0). Default: gaussian. |
+
+use super::context::{check_object_attrs, plugin_type, to_mat4, Ctx};
+use super::document::XNode;
+use super::media;
+use super::props::{check, Props};
+use crate::desc::*;
+use crate::error::SceneError;
+use glam::Mat4;
+
+/// Largest film side (pixels).
+const MAX_FILM_SIDE: i64 = 65_536;
+/// Largest film area: 2^26 pixels = 64 Mpixel. The renderer keeps float32
+/// RGB plus variance per pixel (about 24 bytes), so this bounds the frame
+/// buffers to about 1.6 GB; a typo like width="1e9" is refused, not an OOM.
+const MAX_FILM_PIXELS: i64 = 1 << 26;
+
+/// 35 mm film: the focal length → field of view conversion uses its
+/// diagonal, as Mitsuba does.
+const FILM_35MM_DIAGONAL: f64 = 43.266_615_305_567_87; // sqrt(36² + 24²)
+
+/// Horizontal field of view (degrees) for a focal length in mm on a film of
+/// `width`×`height` pixels: Mitsuba maps the 35 mm diagonal to the film's
+/// diagonal, `tan(fov_x/2) = d/(2 f) · width / sqrt(width² + height²)`.
+fn fov_from_focal_length(f_mm: f64, width: u32, height: u32) -> f64 {
+    let (w, h) = (width as f64, height as f64);
+    let t = FILM_35MM_DIAGONAL / (2.0 * f_mm) * w / (w * w + h * h).sqrt();
+    2.0 * t.atan().to_degrees()
+}
+
+pub(crate) fn default_sensor() -> SensorDesc {
+    let (width, height) = (768, 576);
+    SensorDesc {
+        to_world: Mat4::IDENTITY,
+        fov: fov_from_focal_length(50.0, width, height) as f32,
+        fov_axis: FovAxis::X,
+        near_clip: 0.01,
+        far_clip: 10_000.0,
+        width,
+        height,
+        rfilter: FilterDesc::Gaussian { stddev: 0.5 },
+        spp: 4,
+        seed: 0,
+        medium: None,
+    }
+}
+
+pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorDesc, SceneError> {
+    check_object_attrs(n)?;
+    plugin_type(n, "sensor", &["perspective"])?;
+    let p = Props::new(
+        n,
+        &ctx.ids,
+        &[
+            "fov",
+            "fov_axis",
+            "focal_length",
+            "near_clip",
+            "far_clip",
+            "to_world",
+        ],
+    )?;
+    let mut s = default_sensor();
+    // Film first: the focal length conversion needs its aspect ratio.
+    let films = p.take_objects("film");
+    if films.len() > 1 {
+        return Err(films[1].node.err("a sensor takes one <film>"));
+    }
+    if let Some(f) = films.first() {
+        film(ctx, f.target, &mut s)?;
+    }
+    let samplers = p.take_objects("sampler");
+    if samplers.len() > 1 {
+        return Err(samplers[1].node.err("a sensor takes one <sampler>"));
+    }
+    if let Some(e) = samplers.first() {
+        sampler(ctx, e.target, &mut s)?;
+    }
+    let fov = p.float("fov")?;
+    let focal = p.string("focal_length")?;
+    s.fov = match (fov, focal) {
+        (Some(_), Some((_, fnode))) => {
+            return Err(fnode.err("give either 'fov' or 'focal_length', not both"))
+        }
+        (Some((v, node)), None) => check(
+            node,
+            "fov",
+            v,
+            v > 0.0 && v < 180.0,
+            "0 < fov < 180 degrees",
+        )? as f32,
+        (None, Some((text, node))) => {
+            let num = text.trim().strip_suffix("mm").unwrap_or(text).trim();
+            let f = super::parse::parse_f64(node, "focal_length", num)?;
+            check(node, "focal_length", f, f > 0.0, "> 0 mm, e.g. \"50mm\"")?;
+            s.fov_axis = FovAxis::X;
+            fov_from_focal_length(f, s.width, s.height) as f32
+        }
+        // Mitsuba's default is a 50 mm focal length, on this film's aspect.
+        (None, None) => fov_from_focal_length(50.0, s.width, s.height) as f32,
+    };
+    if focal.is_some() {
+        // Mitsuba converts a focal length through the film diagonal and
+        // never reads fov_axis then.
+        if let Some(e) = p.take("fov_axis") {
+            return Err(e
+                .node
+                .err("'fov_axis' only applies with 'fov', not with 'focal_length'"));
+        }
+    } else {
+        s.fov_axis = match p
+            .choice("fov_axis", "x", &["x", "y", "smaller", "larger"])?
+            .as_str()
+        {
+            "y" => FovAxis::Y,
+            "smaller" => FovAxis::Smaller,
+            "larger" => FovAxis::Larger,
+            _ => FovAxis::X,
+        };
+    }
+    let near = p.float_in("near_clip", 0.01, |v| v > 0.0, "near_clip > 0")?;
+    let far = p.float_in("far_clip", 10_000.0, |v| v > near, "far_clip > near_clip")?;
+    s.near_clip = near as f32;
+    s.far_clip = far as f32;
+    if let Some((m, node)) = p.transform("to_world")? {
+        // Mitsuba refuses scale in a camera transform; we check that the
+        // three axes are unit length and orthogonal (to 1e-3, which a
+        // matrix written with 6 digits meets).
+        let cols = [
+            m.x_axis.truncate(),
+            m.y_axis.truncate(),
+            m.z_axis.truncate(),
+        ];
+        let rigid = cols.iter().all(|c| (c.length() - 1.0).abs() < 1e-3)
+            && cols[0].dot(cols[1]).abs() < 1e-3
+            && cols[0].dot(cols[2]).abs() < 1e-3
+            && cols[1].dot(cols[2]).abs() < 1e-3
+            && m.row(3) == glam::DVec4::new(0.0, 0.0, 0.0, 1.0);
+        if !rigid {
+            return Err(node.err(
+                "a sensor's to_world must be a rigid transform (rotation and translation, no scale or shear)",
+            ));
+        }
+        s.to_world = to_mat4(node, m)?;
+    }
+    let media_e = p.take_objects("medium");
+    if media_e.len() > 1 {
+        return Err(media_e[1].node.err("a sensor takes at most one medium"));
+    }
+    if let Some(e) = media_e.first() {
+        s.medium = Some(media::medium_ref(ctx, e)?);
+    }
+    p.finish()?;
+    Ok(s)
+}
+
+fn sampler(ctx: &Ctx, n: &XNode, s: &mut SensorDesc) -> Result<(), SceneError> {
+    check_object_attrs(n)?;
+    plugin_type(n, "sampler", &["independent"])?;
+    let p = Props::new(n, &ctx.ids, &["sample_count", "seed"])?;
+    s.spp = p.int_in(
+        "sample_count",
+        4,
+        |v| (1..=u32::MAX as i64).contains(&v),
+        "1 <= sample_count <= 2^32-1",
+    )? as u32;
+    s.seed = p.int_in("seed", 0, |v| v >= 0, "seed >= 0")? as u64;
+    p.finish()
+}
+
+fn film(ctx: &Ctx, n: &XNode, s: &mut SensorDesc) -> Result<(), SceneError> {
+    check_object_attrs(n)?;
+    plugin_type(n, "film", &["hdrfilm"])?;
+    let p = Props::new(
+        n,
+        &ctx.ids,
+        &[
+            "width",
+            "height",
+            "pixel_format",
+            "component_format",
+            "file_format",
+            "crop_offset_x",
+            "crop_offset_y",
+            "crop_width",
+            "crop_height",
+        ],
+    )?;
+    let range = format!("1 <= value <= {MAX_FILM_SIDE}");
+    let w = p.int_in("width", 768, |v| (1..=MAX_FILM_SIDE).contains(&v), &range)?;
+    let h = p.int_in("height", 576, |v| (1..=MAX_FILM_SIDE).contains(&v), &range)?;
+    if w * h > MAX_FILM_PIXELS {
+        return Err(n.err(format!(
+            "film of {w}x{h} = {} pixels is larger than the limit of {MAX_FILM_PIXELS} pixels",
+            w * h
+        )));
+    }
+    s.width = w as u32;
+    s.height = h as u32;
+    p.choice("pixel_format", "rgb", &["rgb", "rgba"])?;
+    // The output is always float32 EXR; these are accepted so that Mitsuba
+    // scenes load unchanged.
+    p.choice(
+        "component_format",
+        "float16",
+        &["float16", "float32", "uint32"],
+    )?;
+    p.choice("file_format", "openexr", &["openexr", "exr"])?;
+    for k in [
+        "crop_offset_x",
+        "crop_offset_y",
+        "crop_width",
+        "crop_height",
+    ] {
+        if let Some(e) = p.take(k) {
+            return Err(e.node.err(format!(
+                "'{k}': film cropping is not supported (render the full film)"
+            )));
+        }
+    }
+    let filters = p.take_objects("rfilter");
+    if filters.len() > 1 {
+        return Err(filters[1].node.err("a film takes one <rfilter>"));
+    }
+    if let Some(e) = filters.first() {
+        s.rfilter = rfilter(ctx, e.target)?;
+    }
+    p.finish()
+}
+
+fn rfilter(ctx: &Ctx, n: &XNode) -> Result<FilterDesc, SceneError> {
+    check_object_attrs(n)?;
+    let ty = plugin_type(n, "rfilter", &["box", "gaussian", "tent"])?;
+    let known: &'static [&'static str] = match ty {
+        "gaussian" => &["stddev"],
+        "tent" => &["radius"],
+        _ => &[],
+    };
+    let p = Props::new(n, &ctx.ids, known)?;
+    let f = match ty {
+        "gaussian" => FilterDesc::Gaussian {
+            stddev: p.float_in(
+                "stddev",
+                0.5,
+                |v| v > 0.0 && v <= 64.0,
+                "0 < stddev <= 64 pixels",
+            )? as f32,
+        },
+        "tent" => FilterDesc::Tent {
+            radius: p.float_in(
+                "radius",
+                1.0,
+                |v| v > 0.0 && v <= 256.0,
+                "0 < radius <= 256 pixels",
+            )? as f32,
+        },
+        _ => FilterDesc::Box,
+    };
+    p.finish()?;
+    Ok(f)
+}
