@@ -19,6 +19,7 @@ pub(crate) fn scene_err(e: fgf_scene::SceneError) -> PyErr {
 
 pub(crate) fn render_err(e: RenderError, source: &str) -> PyErr {
     match e {
+        RenderError::Scene(e) => scene_err(e),
         RenderError::InvalidOption(_) => ParameterError::new_err(e.to_string()),
         _ => SceneError::new_err(format!("{source}: {e}")),
     }

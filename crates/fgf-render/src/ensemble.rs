@@ -266,6 +266,7 @@ pub fn ensemble(
     opts: &EnsembleOptions,
     progress: &dyn Progress,
 ) -> Result<EnsembleOutput, RenderError> {
+    scene.validate()?;
     if opts.realizations == 0 {
         return Err(RenderError::InvalidOption(
             "realizations = 0; need at least 1 (2 for a standard error)".into(),

@@ -27,7 +27,7 @@ use crate::geometry::{offset_point, shadow_epsilon, Geometry, Hit, Ray};
 use crate::math::{max_comp, mis_power, Frame, Sampler, Spectrum, UNIFORM_SPHERE_PDF};
 use crate::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
 use crate::render::RenderError;
-use fgf_scene::{IntegratorKind, SceneDesc};
+use fgf_scene::SceneDesc;
 use glam::Vec3;
 
 /// Null-boundary crossings a shadow ray keeps per query (see
@@ -83,13 +83,7 @@ pub struct World {
 
 impl World {
     pub fn build(desc: &SceneDesc) -> Result<World, RenderError> {
-        if desc.integrator.kind == IntegratorKind::Path
-            && (!desc.media.is_empty() || desc.sensor.medium.is_some())
-        {
-            return Err(RenderError::InvalidScene(
-                "the 'path' integrator does not handle media; use 'volpath'".into(),
-            ));
-        }
+        desc.validate()?;
         let geom = Geometry::build(&desc.shapes)?;
         let bsdfs: Vec<Bsdf> = desc.bsdfs.iter().map(Bsdf::from_desc).collect();
         let media = desc
@@ -100,23 +94,8 @@ impl World {
             .collect::<Result<Vec<_>, _>>()?;
         let mut emitters = Vec::new();
         let mut shapes = Vec::new();
-        let check_medium = |m: Option<usize>, what: &str| -> Result<Option<u32>, RenderError> {
-            match m {
-                Some(i) if i >= media.len() => Err(RenderError::InvalidScene(format!(
-                    "{what} refers to medium {i}, but there are {}",
-                    media.len()
-                ))),
-                Some(i) => Ok(Some(i as u32)),
-                None => Ok(None),
-            }
-        };
+        let medium_index = |m: Option<usize>| m.map(|i| i as u32);
         for (i, s) in desc.shapes.iter().enumerate() {
-            if s.bsdf >= bsdfs.len() {
-                return Err(RenderError::InvalidScene(format!(
-                    "{}: BSDF index {} out of range",
-                    s.name, s.bsdf
-                )));
-            }
             let emitter = match &s.emitter {
                 Some(e) => {
                     if geom.areas[i] <= 0.0 {
@@ -134,30 +113,20 @@ impl World {
                 bsdf: s.bsdf as u32,
                 null: bsdfs[s.bsdf].is_null(),
                 emitter,
-                interior: check_medium(s.interior, &s.name)?,
-                exterior: check_medium(s.exterior, &s.name)?,
+                interior: medium_index(s.interior),
+                exterior: medium_index(s.exterior),
             });
         }
         let mut env = None;
         for e in &desc.emitters {
-            if let fgf_scene::EmitterDesc::Area { .. } = e {
-                return Err(RenderError::InvalidScene(
-                    "an area emitter must be attached to a shape".into(),
-                ));
-            }
             let em = Emitter::from_desc(e, None);
             if let Emitter::Constant { .. } = em {
-                if env.is_some() {
-                    return Err(RenderError::InvalidScene(
-                        "more than one constant environment emitter".into(),
-                    ));
-                }
                 env = Some(emitters.len() as u32);
             }
             emitters.push(em);
         }
         let camera = Camera::new(&desc.sensor)?;
-        let camera_medium = check_medium(desc.sensor.medium, "the sensor")?;
+        let camera_medium = medium_index(desc.sensor.medium);
         let any_null = shapes.iter().any(|s| s.null);
         Ok(World {
             any_null,

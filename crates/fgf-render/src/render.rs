@@ -28,6 +28,9 @@ use rayon::prelude::*;
 /// features outside the supported subset).
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
+    /// The description breaks a rule of `SceneDesc::validate`.
+    #[error(transparent)]
+    Scene(#[from] fgf_scene::SceneError),
     #[error("invalid scene: {0}")]
     InvalidScene(String),
     #[error("not supported: {0}")]

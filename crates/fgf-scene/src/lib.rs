@@ -4,6 +4,9 @@
 //!
 //! * [`desc`]: the plain-data [`SceneDesc`] the renderer consumes; scenes
 //!   can be built in code as well as loaded;
+//! * [`validate`](mod@validate): [`SceneDesc::validate`], the one set of
+//!   rules every description obeys, whether it was loaded or built in code
+//!   (the loader and `fgf_render`'s `World::build` both call it);
 //! * [`xml`]: the Mitsuba 3 XML loader ([`load_file`], [`load_str`]), with
 //!   the user documentation of every supported plugin, one table per
 //!   plugin family;
@@ -11,6 +14,7 @@
 
 pub mod desc;
 pub mod error;
+pub mod validate;
 pub mod xml;
 
 pub use desc::*;

@@ -956,8 +956,10 @@ fn fgf_parameter_errors() {
             &["hurst = -0.7"][..],
         ),
         (
+            // The model's own rule (fgf-core's constructor, through
+            // `SceneDesc::validate`), reported at the parameter.
             r#"<float name="hurst" value="-0.2"/><float name="sw" value="-1"/>"#,
-            &["sw = -1", "sw > 0"][..],
+            &["test.xml:4:", "<float name=\"sw\">", "sw = -1", "> 0"][..],
         ),
         (
             r#"<float name="hurst" value="-0.2"/>"#,

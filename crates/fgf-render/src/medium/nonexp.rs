@@ -147,11 +147,6 @@ impl NonExp {
         let mut models = [None; 3];
         for c in 0..3 {
             let s = sigma_t[c] as f64;
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(RenderError::InvalidScene(format!(
-                    "medium {index}: sigma_t channel {c} = {s}; must be finite and >= 0"
-                )));
-            }
             if s == 0.0 {
                 continue;
             }
@@ -167,11 +162,6 @@ impl NonExp {
             };
             models[c] =
                 Some(m.map_err(|e| RenderError::InvalidScene(format!("medium {index}: {e}")))?);
-        }
-        if let Some(a) = albedo.iter().find(|a| !(0.0..=1.0).contains(*a)) {
-            return Err(RenderError::InvalidScene(format!(
-                "medium {index}: albedo {a}; must lie in [0, 1]"
-            )));
         }
         let grey = models[0] == models[1] && models[1] == models[2];
         let tables_of = |m: &Option<Model>| {
@@ -444,14 +434,8 @@ impl Density {
     fn new(g: &GridVolumeDesc, index: usize) -> Result<Density, RenderError> {
         let what = format!("medium {index} density");
         let tex = GridTex::new(g, &what)?;
-        if g.grid.channels != 1 {
-            return Err(RenderError::Unsupported(format!(
-                "{what}: a density grid must have 1 channel (it has {})",
-                g.grid.channels
-            )));
-        }
-        // Same world → unit-cube map as the grid texture (GridTex::new has
-        // already rejected a singular to_world and an empty bbox).
+        // Same world → unit-cube map as the grid texture (a validated
+        // description has an invertible to_world and a non-empty bbox).
         let mut to_unit = Affine3A::from_mat4(g.to_world).inverse();
         if g.use_grid_bbox {
             let b = g.grid.bbox;

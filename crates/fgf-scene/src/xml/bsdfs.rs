@@ -6,10 +6,11 @@
 
 use super::context::{check_object_attrs, plugin_type, rgb, Ctx};
 use super::document::XNode;
-use super::props::{check, Entry, Props};
+use super::props::{check_if, check_rgb, Entry, Props};
 use super::tables;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{IOR, NON_NEGATIVE, UNIT};
 
 /// The BSDF of a shape without one, as Mitsuba 3.9's `Shape` constructor
 /// chooses it: a diffuse BSDF of reflectance 0.5, except on a shape with an
@@ -25,6 +26,7 @@ pub(crate) fn default_bsdf(ctx: &mut Ctx, emits: bool) -> BsdfId {
         ctx.bsdfs.push(BsdfDesc::Diffuse {
             reflectance: [reflectance; 3],
         });
+        ctx.bsdf_nodes.push(None);
         ctx.bsdfs.len() - 1
     })
 }
@@ -44,6 +46,7 @@ pub(crate) fn bsdf_id<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<BsdfId, Sce
     }
     let d = bsdf_desc(ctx, n, 0)?;
     ctx.bsdfs.push(d);
+    ctx.bsdf_nodes.push(Some(n));
     let i = ctx.bsdfs.len() - 1;
     if let Some(id) = n.attr("id") {
         ctx.bsdf_by_id.insert(id.to_string(), i);
@@ -71,12 +74,12 @@ fn ior(e: &Entry) -> Result<f64, SceneError> {
             });
     }
     let v = e.float()?;
-    check(
+    check_if(
         e.node,
         name,
         v,
-        v > 0.0,
-        "a number > 0 or a material name such as \"bk7\"",
+        (IOR.ok)(v),
+        &format!("{} or a material name such as \"bk7\"", IOR.text),
     )
 }
 
@@ -100,10 +103,9 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
         _ => &[],
     };
     let p = Props::new(n, &ctx.ids, known)?;
-    let unit = |v: f64| (0.0..=1.0).contains(&v);
     let d = match ty {
         "diffuse" => BsdfDesc::Diffuse {
-            reflectance: rgb(p.color_in("reflectance", [0.5; 3], unit, "in [0, 1]")?),
+            reflectance: rgb(p.color_in("reflectance", [0.5; 3], UNIT)?),
         },
         "null" => BsdfDesc::Null,
         "dielectric" => {
@@ -118,17 +120,11 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             BsdfDesc::Dielectric {
                 int_ior: int_ior as f32,
                 ext_ior: ext_ior as f32,
-                specular_reflectance: rgb(p.color_in(
-                    "specular_reflectance",
-                    [1.0; 3],
-                    unit,
-                    "in [0, 1]",
-                )?),
+                specular_reflectance: rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?),
                 specular_transmittance: rgb(p.color_in(
                     "specular_transmittance",
                     [1.0; 3],
-                    unit,
-                    "in [0, 1]",
+                    UNIT,
                 )?),
             }
         }
@@ -159,16 +155,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                 _ => {
                     let nonneg = |v: Option<([f64; 3], &XNode)>, name: &str, def: f64| match v {
                         None => Ok([def; 3]),
-                        Some((c, node)) => {
-                            if c.iter().all(|&x| x >= 0.0) {
-                                Ok(c)
-                            } else {
-                                Err(node.err(format!(
-                                    "invalid {name} = ({}, {}, {}) (valid: each channel >= 0)",
-                                    c[0], c[1], c[2]
-                                )))
-                            }
-                        }
+                        Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
                     };
                     // Mitsuba's defaults eta = 0, k = 1: a perfect mirror.
                     (nonneg(eta, "eta", 0.0)?, nonneg(k, "k", 1.0)?)
@@ -177,12 +164,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             BsdfDesc::Conductor {
                 eta: rgb(eta),
                 k: rgb(k),
-                specular_reflectance: rgb(p.color_in(
-                    "specular_reflectance",
-                    [1.0; 3],
-                    unit,
-                    "in [0, 1]",
-                )?),
+                specular_reflectance: rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?),
                 perfect_mirror: eta == [0.0; 3] && k == [1.0; 3],
             }
         }

@@ -6,6 +6,7 @@ use super::document::XNode;
 use super::props::OBJECT_TAGS;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{is_invertible, singular};
 use glam::{DMat4, Mat4};
 use std::collections::HashMap;
 
@@ -13,6 +14,8 @@ use std::collections::HashMap;
 pub(crate) struct Ctx<'a> {
     pub ids: HashMap<String, &'a XNode>,
     pub bsdfs: Vec<BsdfDesc>,
+    /// The element each BSDF was defined by (`None` for the defaults).
+    pub bsdf_nodes: Vec<Option<&'a XNode>>,
     pub bsdf_by_id: HashMap<String, BsdfId>,
     pub default_bsdf: Option<BsdfId>,
     /// The black diffuse BSDF of emitters without a BSDF (shared, like
@@ -20,7 +23,7 @@ pub(crate) struct Ctx<'a> {
     pub default_emitter_bsdf: Option<BsdfId>,
     pub media: Vec<MediumDesc>,
     pub medium_by_id: HashMap<String, MediumId>,
-    /// The element each medium was defined by (for deferred errors).
+    /// The element each medium was defined by.
     pub medium_nodes: Vec<&'a XNode>,
     /// Ids being instantiated (reference cycle detection).
     pub resolving: Vec<String>,
@@ -38,6 +41,7 @@ impl<'a> Ctx<'a> {
         Ok(Ctx {
             ids,
             bsdfs: Vec::new(),
+            bsdf_nodes: Vec::new(),
             bsdf_by_id: HashMap::new(),
             default_bsdf: None,
             default_emitter_bsdf: None,
@@ -93,10 +97,8 @@ pub(crate) fn to_mat4(node: &XNode, m: DMat4) -> Result<Mat4, SceneError> {
 pub(crate) fn to_invertible_mat4(node: &XNode, m: DMat4) -> Result<Mat4, SceneError> {
     let f = to_mat4(node, m)?;
     let det = m.determinant();
-    if det == 0.0 || !det.is_finite() || f.determinant() == 0.0 || !f.inverse().is_finite() {
-        return Err(node.err(format!(
-            "to_world is singular or nearly so (determinant {det:e}); the renderer needs its inverse: give every axis a nonzero scale (a flat rectangle or disk keeps z scale 1)"
-        )));
+    if det == 0.0 || !det.is_finite() || !is_invertible(&f) {
+        return Err(node.err(singular(det)));
     }
     Ok(f)
 }
@@ -128,9 +130,4 @@ pub(crate) fn plugin_type<'a>(
 /// Attributes an object element may carry.
 pub(crate) fn check_object_attrs(n: &XNode) -> Result<(), SceneError> {
     n.check_attrs(&["type", "id", "name"])
-}
-
-/// A value in [0, 1] (albedos, reflectances).
-pub(crate) fn unit(v: f64) -> bool {
-    (0.0..=1.0).contains(&v)
 }

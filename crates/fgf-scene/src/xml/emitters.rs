@@ -6,9 +6,10 @@
 
 use super::context::{check_object_attrs, plugin_type, rgb, to_invertible_mat4, to_mat4, Ctx};
 use super::document::XNode;
-use super::props::Props;
+use super::props::{check_if, Props};
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{BEAM_WIDTH, CUTOFF_ANGLE, NON_NEGATIVE};
 use glam::{DVec3, Mat4, Vec3};
 
 pub(crate) fn emitter_desc(
@@ -43,16 +44,15 @@ pub(crate) fn emitter_desc(
         _ => &["irradiance", "direction", "to_world"],
     };
     let p = Props::new(n, &ctx.ids, known)?;
-    let nonneg = |v: f64| v >= 0.0;
     let d = match ty {
         "area" => EmitterDesc::Area {
-            radiance: rgb(p.color_in("radiance", [1.0; 3], nonneg, ">= 0")?),
+            radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),
         },
         "constant" => EmitterDesc::Constant {
-            radiance: rgb(p.color_in("radiance", [1.0; 3], nonneg, ">= 0")?),
+            radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),
         },
         "point" => {
-            let intensity = rgb(p.color_in("intensity", [1.0; 3], nonneg, ">= 0")?);
+            let intensity = rgb(p.color_in("intensity", [1.0; 3], NON_NEGATIVE)?);
             let position = match (p.vec3("position")?, p.transform("to_world")?) {
                 (Some(_), Some((_, node))) => {
                     return Err(node.err("give either 'position' or 'to_world', not both"))
@@ -67,23 +67,18 @@ pub(crate) fn emitter_desc(
             }
         }
         "spot" => {
-            let intensity = rgb(p.color_in("intensity", [1.0; 3], nonneg, ">= 0")?);
+            let intensity = rgb(p.color_in("intensity", [1.0; 3], NON_NEGATIVE)?);
             let to_world = match p.transform("to_world")? {
                 Some((m, node)) => to_invertible_mat4(node, m)?,
                 None => Mat4::IDENTITY,
             };
-            let cutoff = p.float_in(
-                "cutoff_angle",
-                20.0,
-                |v| v > 0.0 && v < 180.0,
-                "0 < cutoff_angle < 180 degrees",
-            )?;
-            let beam = p.float_in(
-                "beam_width",
-                0.75 * cutoff,
-                |v| v >= 0.0 && v <= cutoff,
-                "0 <= beam_width <= cutoff_angle degrees",
-            )?;
+            let cutoff = p.float_in("cutoff_angle", 20.0, CUTOFF_ANGLE)?;
+            let beam = match p.float("beam_width")? {
+                None => 0.75 * cutoff,
+                Some((v, node)) => {
+                    check_if(node, "beam_width", v, v >= 0.0 && v <= cutoff, BEAM_WIDTH)?
+                }
+            };
             EmitterDesc::Spot {
                 to_world,
                 intensity,
@@ -92,7 +87,7 @@ pub(crate) fn emitter_desc(
             }
         }
         _ => {
-            let irradiance = rgb(p.color_in("irradiance", [1.0; 3], nonneg, ">= 0")?);
+            let irradiance = rgb(p.color_in("irradiance", [1.0; 3], NON_NEGATIVE)?);
             let dir = match (p.vec3("direction")?, p.transform("to_world")?) {
                 (Some(_), Some((_, node))) => {
                     return Err(node.err("give either 'direction' or 'to_world', not both"))

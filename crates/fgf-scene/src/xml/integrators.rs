@@ -9,23 +9,14 @@ use super::document::XNode;
 use super::props::Props;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{MAX_DEPTH, RR_DEPTH};
 
 pub(crate) fn integrator_desc(ctx: &Ctx, n: &XNode) -> Result<IntegratorDesc, SceneError> {
     check_object_attrs(n)?;
     let ty = plugin_type(n, "integrator", &["volpath", "path"])?;
     let p = Props::new(n, &ctx.ids, &["max_depth", "rr_depth", "hide_emitters"])?;
-    let max_depth = p.int_in(
-        "max_depth",
-        -1,
-        |v| v == -1 || (0..=i32::MAX as i64).contains(&v),
-        "-1 (unbounded) or 0 <= max_depth <= 2^31-1",
-    )? as i32;
-    let rr_depth = p.int_in(
-        "rr_depth",
-        5,
-        |v| (1..=u32::MAX as i64).contains(&v),
-        "1 <= rr_depth <= 2^32-1",
-    )? as u32;
+    let max_depth = p.int_in("max_depth", -1, MAX_DEPTH)? as i32;
+    let rr_depth = p.int_in("rr_depth", 5, RR_DEPTH)? as u32;
     let hide_emitters = p.bool_or("hide_emitters", false)?;
     p.finish()?;
     Ok(IntegratorDesc {

@@ -12,7 +12,7 @@
 //! the conversion `sigma_t = sigma_s + sigma_a`, `albedo = sigma_s / sigma_t`.
 //!
 
-use super::context::{check_object_attrs, rgb, unit, Ctx};
+use super::context::{check_object_attrs, rgb, Ctx};
 use super::document::XNode;
 use super::nonexp;
 use super::phase;
@@ -20,6 +20,7 @@ use super::props::{Entry, Props};
 use super::volumes;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{Range, NON_NEGATIVE, SCALE, UNIT};
 
 const MEDIA: &[&str] = &["homogeneous", "heterogeneous", "fgf", "nonexponential"];
 
@@ -91,11 +92,11 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
         }
     }
     let phase = phase::phase_of(ctx, &p)?;
-    let scale = p.float_in("scale", 1.0, |v| v >= 0.0, "scale >= 0")?;
+    let scale = p.float_in("scale", 1.0, SCALE)?;
     let d = match ty {
         "homogeneous" => {
-            let sigma_t = constant_of(ctx, &p, "sigma_t", 1.0, |v| v >= 0.0, ">= 0")?;
-            let albedo = constant_of(ctx, &p, "albedo", 0.75, unit, "in [0, 1]")?;
+            let sigma_t = constant_of(ctx, &p, "sigma_t", 1.0, NON_NEGATIVE)?;
+            let albedo = constant_of(ctx, &p, "albedo", 0.75, UNIT)?;
             p.bool_or("sample_emitters", true)?;
             let sigma_t = sigma_t.map(|c| c * scale);
             if sigma_t.iter().any(|&c| c > f32::MAX as f64) {
@@ -111,19 +112,9 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
             }
         }
         "heterogeneous" => {
-            let sigma_t = volumes::volume_of(ctx, &p, "sigma_t", 1.0, |v| v >= 0.0, ">= 0")?;
-            let albedo = volumes::volume_of(ctx, &p, "albedo", 0.75, unit, "in [0, 1]")?;
+            let sigma_t = volumes::volume_of(ctx, &p, "sigma_t", 1.0, NON_NEGATIVE)?;
+            let albedo = volumes::volume_of(ctx, &p, "albedo", 0.75, UNIT)?;
             p.bool_or("sample_emitters", true)?;
-            // The renderer's majorants are scale * max(sigma_t): keep them finite.
-            let max = match &sigma_t {
-                VolumeDesc::Constant(c) => c.iter().cloned().fold(0.0, f32::max),
-                VolumeDesc::Grid(g) => g.grid.data.iter().cloned().fold(0.0, f32::max),
-            } as f64;
-            if max * scale > f32::MAX as f64 {
-                return Err(n.err(format!(
-                    "scale * max(sigma_t) = {scale} * {max} overflows single precision"
-                )));
-            }
             MediumDesc::Heterogeneous {
                 sigma_t,
                 albedo,
@@ -143,10 +134,9 @@ fn constant_of(
     p: &Props,
     name: &str,
     default: f64,
-    ok: impl Fn(f64) -> bool + Copy,
-    range: &str,
+    r: Range<f64>,
 ) -> Result<[f64; 3], SceneError> {
-    match volumes::volume_of(ctx, p, name, default, ok, range)? {
+    match volumes::volume_of(ctx, p, name, default, r)? {
         VolumeDesc::Constant(c) => Ok(c.map(|x| x as f64)),
         VolumeDesc::Grid(_) => Err(p.node.err(format!(
             "'{name}' of a homogeneous medium must be a constant; use a heterogeneous medium for a grid"

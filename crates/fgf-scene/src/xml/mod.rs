@@ -64,6 +64,7 @@ pub mod volumes;
 
 use crate::desc::*;
 use crate::error::{SceneError, SceneErrorKind};
+use crate::validate::{Invalid, Subject};
 use context::Ctx;
 use document::XNode;
 use std::path::Path;
@@ -115,14 +116,16 @@ pub fn load_str(
 const TOP_LEVEL: &[&str] = &["integrator", "sensor", "shape", "bsdf", "emitter", "medium"];
 
 /// Stage 2: instantiate the top-level elements, in file order (a shape's
-/// nested objects are instantiated with it), then fill in Mitsuba's
-/// defaults for what the scene leaves out.
+/// nested objects are instantiated with it), fill in Mitsuba's defaults for
+/// what the scene leaves out, and validate the result.
 fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
     let mut ctx = Ctx::new(nodes)?;
     let mut integrator: Option<(IntegratorDesc, &XNode)> = None;
     let mut sensor: Option<(SensorDesc, &XNode)> = None;
     let mut shapes = Vec::new();
+    let mut shape_nodes = Vec::new();
     let mut emitters = Vec::new();
+    let mut emitter_nodes = Vec::new();
     for n in nodes {
         match n.tag.as_str() {
             "integrator" => {
@@ -143,11 +146,17 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
                 }
                 sensor = Some((sensors::sensor_desc(&mut ctx, n)?, n));
             }
-            "shape" => shapes.push(shapes::shape_desc(&mut ctx, n)?),
+            "shape" => {
+                shapes.push(shapes::shape_desc(&mut ctx, n)?);
+                shape_nodes.push(n);
+            }
             "bsdf" => {
                 bsdfs::bsdf_id(&mut ctx, n)?;
             }
-            "emitter" => emitters.push(emitters::emitter_desc(&ctx, n, false)?),
+            "emitter" => {
+                emitters.push(emitters::emitter_desc(&ctx, n, false)?);
+                emitter_nodes.push(n);
+            }
             "medium" => {
                 media::medium_id(&mut ctx, n)?;
             }
@@ -159,42 +168,95 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
             }
         }
     }
-    // Mitsuba's defaults: a `path` integrator and a default perspective camera.
-    let integrator = match integrator {
-        Some((d, n)) => {
-            if d.kind == IntegratorKind::Path && !ctx.media.is_empty() {
-                return Err(n.err(format!(
-                    "the 'path' integrator ignores participating media, but this scene has {} (first at {}:{}); use <integrator type=\"volpath\">",
-                    ctx.media.len(),
-                    ctx.medium_nodes[0].file.display(),
-                    ctx.medium_nodes[0].line
-                )));
-            }
-            d
-        }
-        None => {
-            if !ctx.media.is_empty() {
-                return Err(SceneError::new(
-                    SceneErrorKind::Invalid,
-                    source,
-                    "the scene has participating media but no <integrator>; Mitsuba's default integrator 'path' ignores media: add <integrator type=\"volpath\"/>",
-                ));
-            }
-            integrators::default_integrator()
-        }
-    };
-    let sensor = match sensor {
-        Some((s, _)) => s,
-        None => sensors::default_sensor(),
-    };
     nonexp::resolve_default_lengths(&mut ctx, &shapes)?;
-    Ok(SceneDesc {
+    let places = Places {
+        source,
+        integrator: integrator.as_ref().map(|(_, n)| *n),
+        sensor: sensor.as_ref().map(|(_, n)| *n),
+        shapes: shape_nodes,
+        bsdfs: ctx.bsdf_nodes,
+        emitters: emitter_nodes,
+        media: ctx.medium_nodes,
+    };
+    // Mitsuba's defaults: a `path` integrator and a default perspective camera.
+    let desc = SceneDesc {
         source: source.to_string(),
-        integrator,
-        sensor,
+        integrator: integrator.map_or_else(integrators::default_integrator, |(d, _)| d),
+        sensor: sensor.map_or_else(sensors::default_sensor, |(s, _)| s),
         shapes,
         bsdfs: ctx.bsdfs,
         emitters,
         media: ctx.media,
-    })
+    };
+    desc.check(&|s| places.name(s))
+        .map_err(|e| places.error(e))?;
+    Ok(desc)
+}
+
+/// Where each object of the description was written, to place the
+/// validator's messages: at the parameter the rule is about when the
+/// plugin's element (or one nested in it) gives it, else at the plugin.
+struct Places<'a> {
+    source: &'a str,
+    integrator: Option<&'a XNode>,
+    sensor: Option<&'a XNode>,
+    shapes: Vec<&'a XNode>,
+    /// `None` for the default BSDFs.
+    bsdfs: Vec<Option<&'a XNode>>,
+    emitters: Vec<&'a XNode>,
+    media: Vec<&'a XNode>,
+}
+
+impl<'a> Places<'a> {
+    fn node(&self, s: Subject) -> Option<&'a XNode> {
+        match s {
+            Subject::Integrator => self.integrator,
+            Subject::Sensor => self.sensor,
+            Subject::Shape(i) => self.shapes.get(i).copied(),
+            Subject::Bsdf(i) => self.bsdfs.get(i).copied().flatten(),
+            Subject::Emitter(i) => self.emitters.get(i).copied(),
+            Subject::Medium(i) => self.media.get(i).copied(),
+        }
+    }
+
+    /// An object named in another one's message: `<medium type="fgf"> at scene.xml:12`.
+    fn name(&self, s: Subject) -> String {
+        match self.node(s) {
+            Some(n) => format!("{} at {}:{}", n.label(), n.file.display(), n.line),
+            None => format!("{s:?}"),
+        }
+    }
+
+    fn error(&self, e: Invalid) -> SceneError {
+        match self.node(e.subject) {
+            Some(n) => {
+                let at = e
+                    .param
+                    .as_deref()
+                    .and_then(|p| find_param(n, p))
+                    .unwrap_or(n);
+                at.err(e.message)
+            }
+            // Only Mitsuba's default integrator can break a rule (with media).
+            None if e.subject == Subject::Integrator => SceneError::new(
+                SceneErrorKind::Invalid,
+                self.source,
+                format!(
+                    "the scene has no <integrator>, so it gets Mitsuba's default 'path': {}",
+                    e.message
+                ),
+            ),
+            None => SceneError::new(SceneErrorKind::Invalid, self.source, e.message),
+        }
+    }
+}
+
+/// The element inside `n` that sets parameter `name`: a child of `n`, else
+/// (for a sensor's film and sampler, a shape's emitter, a medium's volumes)
+/// the first one deeper down.
+fn find_param<'a>(n: &'a XNode, name: &str) -> Option<&'a XNode> {
+    n.children
+        .iter()
+        .find(|c| c.attr("name") == Some(name))
+        .or_else(|| n.children.iter().find_map(|c| find_param(c, name)))
 }

@@ -67,15 +67,27 @@
 //!     # img: (H, W, 3) float32 numpy array, linear RGB
 //! ```
 
-use super::context::{rgb, unit, Ctx};
+use super::context::{rgb, Ctx};
 use super::document::XNode;
 use super::props::{check, Props};
 use super::volumes;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{Range, NON_NEGATIVE, UNIT};
 use fgf_core::stats::{Regime, HURST_RANGE};
-use fgf_core::transmittance::{Davis, DavisWeinstein, Fgf};
 use glam::DVec3;
+
+/// The `sigma_t` parameter as written, before `scale`. The description's
+/// `sigma_t` must be accepted by the fgf-core model constructors, which
+/// require it finite and `> 0`: so must this and `scale`.
+const MEAN_EXTINCTION: Range<f64> = Range {
+    ok: |v| v.is_finite() && v > 0.0,
+    text: "> 0; it is the mean extinction σ_m",
+};
+const POSITIVE_SCALE: Range<f64> = Range {
+    ok: |v| v.is_finite() && v > 0.0,
+    text: "scale > 0 for a non-exponential medium",
+};
 
 fn is_kfbm(hurst: f64) -> bool {
     matches!(Regime::from_hurst(hurst), Ok(Regime::KFbm { .. }))
@@ -89,24 +101,8 @@ pub(crate) fn nonexponential<'a>(
     scale: f64,
     phase: PhaseDesc,
 ) -> Result<MediumDesc, SceneError> {
-    let pos = |v: f64| v > 0.0;
-    let sigma_m = match p.color("sigma_t")? {
-        None => [1.0; 3],
-        Some((c, node)) => {
-            if !c.iter().all(|&v| v > 0.0) {
-                return Err(node.err(format!(
-                    "invalid sigma_t = ({}, {}, {}) (valid: each channel > 0; it is the mean extinction σ_m)",
-                    c[0], c[1], c[2]
-                )));
-            }
-            c
-        }
-    };
-    if scale <= 0.0 {
-        return Err(n.err(format!(
-            "invalid scale = {scale} (valid: scale > 0 for a non-exponential medium)"
-        )));
-    }
+    let sigma_m = p.color_in("sigma_t", [1.0; 3], MEAN_EXTINCTION)?;
+    check(n, "scale", scale, POSITIVE_SCALE)?;
     let sigma_t = sigma_m.map(|c| c * scale);
     if !sigma_t
         .iter()
@@ -114,7 +110,7 @@ pub(crate) fn nonexponential<'a>(
     {
         return Err(n.err("sigma_t * scale is outside the representable range"));
     }
-    let albedo = p.color_in("albedo", [0.75; 3], unit, "in [0, 1]")?;
+    let albedo = p.color_in("albedo", [0.75; 3], UNIT)?;
     let kernel = match p
         .choice(
             "kernel",
@@ -138,7 +134,7 @@ pub(crate) fn nonexponential<'a>(
                 h
             }
         };
-        let sw = p.float_req("sw", pos, "sw > 0")?;
+        let sw = p.float_required("sw")?;
         let length =
             match p.float("length")? {
                 None => None,
@@ -149,7 +145,7 @@ pub(crate) fn nonexponential<'a>(
                         if hurst == -0.5 { "white noise" } else { "pink noise" }
                     )));
                     }
-                    Some(check(node, "length", l, l > 0.0, "length > 0")?)
+                    Some(l)
                 }
             };
         TransmittanceDesc::Fgf { hurst, sw, length }
@@ -160,11 +156,11 @@ pub(crate) fn nonexponential<'a>(
         let model = match t {
             "exponential" => TransmittanceDesc::Exponential,
             "davis" => TransmittanceDesc::Davis {
-                alpha: p.float_req("alpha", pos, "alpha > 0")?,
+                alpha: p.float_required("alpha")?,
             },
             "davis_weinstein" => TransmittanceDesc::DavisWeinstein {
-                h: p.float_req("h", |h| (0.5..=1.0).contains(&h), "0.5 <= h <= 1")?,
-                c: p.float_req("c", pos, "c > 0")?,
+                h: p.float_required("h")?,
+                c: p.float_required("c")?,
             },
             _ => {
                 return Err(tnode.err(format!(
@@ -191,14 +187,7 @@ pub(crate) fn nonexponential<'a>(
                     .node
                     .err("'density' must be a <volume type=\"gridvolume\">"));
             }
-            let g = volumes::gridvolume(ctx, t, "density", |v| v >= 0.0, ">= 0")?;
-            if g.grid.channels != 1 {
-                return Err(e.node.err(format!(
-                    "'density' grid must have 1 channel (it has {})",
-                    g.grid.channels
-                )));
-            }
-            Some(g)
+            Some(volumes::gridvolume(ctx, t, "density", NON_NEGATIVE)?)
         }
     };
     Ok(MediumDesc::NonExponential {
@@ -242,27 +231,6 @@ pub(crate) fn resolve_default_lengths(
             )));
         }
         *length = Some(diag);
-    }
-    // Whole-model validation by the physics crate's constructors, per colour
-    // channel (each channel has its own mean extinction σ_m).
-    for (m, node) in ctx.media.iter().zip(&ctx.medium_nodes) {
-        let MediumDesc::NonExponential { sigma_t, model, .. } = m else {
-            continue;
-        };
-        for &s in sigma_t {
-            let s = s as f64;
-            let r = match *model {
-                TransmittanceDesc::Fgf { hurst, sw, length } => {
-                    Fgf::new(s, hurst, sw, length).map(|_| ())
-                }
-                TransmittanceDesc::Davis { alpha } => Davis::new(s, alpha).map(|_| ()),
-                TransmittanceDesc::DavisWeinstein { h, c } => {
-                    DavisWeinstein::new(s, h, c).map(|_| ())
-                }
-                TransmittanceDesc::Exponential => Ok(()),
-            };
-            r.map_err(|e| node.err(e.to_string()))?;
-        }
     }
     Ok(())
 }

@@ -6,6 +6,7 @@ use super::context::{check_object_attrs, Ctx};
 use super::props::Props;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::HG_G;
 
 pub(crate) fn phase_of(ctx: &Ctx, p: &Props) -> Result<PhaseDesc, SceneError> {
     let phases = p.take_objects("phase");
@@ -30,7 +31,7 @@ pub(crate) fn phase_of(ctx: &Ctx, p: &Props) -> Result<PhaseDesc, SceneError> {
     let q = Props::new(n, &ctx.ids, known)?;
     let d = if ty == "hg" {
         PhaseDesc::Hg {
-            g: q.float_in("g", 0.8, |g| g > -1.0 && g < 1.0, "-1 < g < 1")? as f32,
+            g: q.float_in("g", 0.8, HG_G)? as f32,
         }
     } else {
         PhaseDesc::Isotropic

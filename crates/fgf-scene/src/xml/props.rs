@@ -9,6 +9,7 @@ use super::document::XNode;
 use super::parse::{parse_f64, parse_list, xyz_or_value};
 use super::transform;
 use crate::error::SceneError;
+use crate::validate::{out_of_range, out_of_range_rgb, Range};
 use glam::DMat4;
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -330,76 +331,43 @@ impl<'a> Props<'a> {
             .transpose()
     }
 
-    /// A float with a default, checked by `ok`; `range` describes the valid
-    /// values in the message.
-    pub fn float_in(
-        &self,
-        name: &str,
-        default: f64,
-        ok: impl Fn(f64) -> bool,
-        range: &str,
-    ) -> Result<f64, SceneError> {
+    /// A float with a default, checked against `r`.
+    pub fn float_in(&self, name: &str, default: f64, r: Range<f64>) -> Result<f64, SceneError> {
         match self.float(name)? {
             None => Ok(default),
-            Some((v, node)) => check(node, name, v, ok(v), range),
+            Some((v, node)) => check(node, name, v, r),
         }
     }
 
-    /// A required float, checked by `ok`.
-    pub fn float_req(
-        &self,
-        name: &str,
-        ok: impl Fn(f64) -> bool,
-        range: &str,
-    ) -> Result<f64, SceneError> {
+    /// A required float (its range is checked where it is used).
+    pub fn float_required(&self, name: &str) -> Result<f64, SceneError> {
         match self.float(name)? {
-            None => Err(self.node.err(format!(
-                "missing required parameter '{name}' (valid: {range})"
-            ))),
-            Some((v, node)) => check(node, name, v, ok(v), range),
+            None => Err(self
+                .node
+                .err(format!("missing required parameter '{name}'"))),
+            Some((v, _)) => Ok(v),
         }
     }
 
-    /// An integer with a default, checked by `ok`.
-    pub fn int_in(
-        &self,
-        name: &str,
-        default: i64,
-        ok: impl Fn(i64) -> bool,
-        range: &str,
-    ) -> Result<i64, SceneError> {
+    /// An integer with a default, checked against `r`.
+    pub fn int_in(&self, name: &str, default: i64, r: Range<i64>) -> Result<i64, SceneError> {
         match self.int(name)? {
             None => Ok(default),
-            Some((v, node)) => {
-                if ok(v) {
-                    Ok(v)
-                } else {
-                    Err(node.err(format!("invalid {name} = {v} (valid: {range})")))
-                }
-            }
+            Some((v, _)) if (r.ok)(v) => Ok(v),
+            Some((v, node)) => Err(node.err(out_of_range(name, v, r.text))),
         }
     }
 
-    /// A colour with a default, every channel checked by `ok`.
+    /// A colour with a default, every channel checked against `r`.
     pub fn color_in(
         &self,
         name: &str,
         default: [f64; 3],
-        ok: impl Fn(f64) -> bool,
-        range: &str,
+        r: Range<f64>,
     ) -> Result<[f64; 3], SceneError> {
         match self.color(name)? {
             None => Ok(default),
-            Some((v, node)) => {
-                if v.iter().all(|&c| ok(c)) {
-                    Ok(v)
-                } else {
-                    Err(node.err(format!(
-                        "invalid {name} = ({}, {}, {}) (valid: each channel {range})",
-                        v[0], v[1], v[2]
-                    )))
-                }
-            }
+            Some((v, node)) => check_rgb(node, name, v, r),
         }
     }
 
@@ -446,7 +414,14 @@ impl<'a> Props<'a> {
     }
 }
 
-pub(crate) fn check(
+/// `v`, or the error that it is outside `r`.
+pub(crate) fn check(node: &XNode, name: &str, v: f64, r: Range<f64>) -> Result<f64, SceneError> {
+    check_if(node, name, v, (r.ok)(v), r.text)
+}
+
+/// `v` if `ok`, else the error that it is outside `range` (for ranges that
+/// depend on another parameter).
+pub(crate) fn check_if(
     node: &XNode,
     name: &str,
     v: f64,
@@ -456,7 +431,21 @@ pub(crate) fn check(
     if ok {
         Ok(v)
     } else {
-        Err(node.err(format!("invalid {name} = {v} (valid: {range})")))
+        Err(node.err(out_of_range(name, v, range)))
+    }
+}
+
+/// A colour, or the error that a channel is outside `r`.
+pub(crate) fn check_rgb(
+    node: &XNode,
+    name: &str,
+    c: [f64; 3],
+    r: Range<f64>,
+) -> Result<[f64; 3], SceneError> {
+    if c.iter().all(|&v| (r.ok)(v)) {
+        Ok(c)
+    } else {
+        Err(node.err(out_of_range_rgb(name, &c, r.text)))
     }
 }
 

@@ -10,17 +10,26 @@
 use super::context::{check_object_attrs, plugin_type, to_mat4, Ctx};
 use super::document::XNode;
 use super::media;
-use super::props::{check, Props};
+use super::props::{check, check_if, Props};
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{
+    film_too_large, is_rigid, Range, FAR_CLIP, FILM_SIDE, FOV, GAUSSIAN_STDDEV, MAX_FILM_PIXELS,
+    NEAR_CLIP, NOT_RIGID, SAMPLE_COUNT, TENT_RADIUS,
+};
 use glam::Mat4;
 
-/// Largest film side (pixels).
-const MAX_FILM_SIDE: i64 = 65_536;
-/// Largest film area: 2^26 pixels = 64 Mpixel. The renderer keeps float32
-/// RGB plus variance per pixel (about 24 bytes), so this bounds the frame
-/// buffers to about 1.6 GB; a typo like width="1e9" is refused, not an OOM.
-const MAX_FILM_PIXELS: i64 = 1 << 26;
+/// A focal length in mm (only the loader sees it: the description holds
+/// the field of view).
+const FOCAL_LENGTH: Range<f64> = Range {
+    ok: |v| v > 0.0,
+    text: "> 0 mm, e.g. \"50mm\"",
+};
+/// The sampler's seed (the description holds it as a u64).
+const SEED: Range<i64> = Range {
+    ok: |v| v >= 0,
+    text: "seed >= 0",
+};
 
 /// 35 mm film: the focal length → field of view conversion uses its
 /// diagonal, as Mitsuba does.
@@ -89,17 +98,11 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
         (Some(_), Some((_, fnode))) => {
             return Err(fnode.err("give either 'fov' or 'focal_length', not both"))
         }
-        (Some((v, node)), None) => check(
-            node,
-            "fov",
-            v,
-            v > 0.0 && v < 180.0,
-            "0 < fov < 180 degrees",
-        )? as f32,
+        (Some((v, node)), None) => check(node, "fov", v, FOV)? as f32,
         (None, Some((text, node))) => {
             let num = text.trim().strip_suffix("mm").unwrap_or(text).trim();
             let f = super::parse::parse_f64(node, "focal_length", num)?;
-            check(node, "focal_length", f, f > 0.0, "> 0 mm, e.g. \"50mm\"")?;
+            check(node, "focal_length", f, FOCAL_LENGTH)?;
             s.fov_axis = FovAxis::X;
             fov_from_focal_length(f, s.width, s.height) as f32
         }
@@ -125,28 +128,17 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
             _ => FovAxis::X,
         };
     }
-    let near = p.float_in("near_clip", 0.01, |v| v > 0.0, "near_clip > 0")?;
-    let far = p.float_in("far_clip", 10_000.0, |v| v > near, "far_clip > near_clip")?;
+    let near = p.float_in("near_clip", 0.01, NEAR_CLIP)?;
+    let far = match p.float("far_clip")? {
+        None => 10_000.0,
+        Some((v, node)) => check_if(node, "far_clip", v, v > near, FAR_CLIP)?,
+    };
     s.near_clip = near as f32;
     s.far_clip = far as f32;
     if let Some((m, node)) = p.transform("to_world")? {
-        // Mitsuba refuses scale in a camera transform; we check that the
-        // three axes are unit length and orthogonal (to 1e-3, which a
-        // matrix written with 6 digits meets).
-        let cols = [
-            m.x_axis.truncate(),
-            m.y_axis.truncate(),
-            m.z_axis.truncate(),
-        ];
-        let rigid = cols.iter().all(|c| (c.length() - 1.0).abs() < 1e-3)
-            && cols[0].dot(cols[1]).abs() < 1e-3
-            && cols[0].dot(cols[2]).abs() < 1e-3
-            && cols[1].dot(cols[2]).abs() < 1e-3
-            && m.row(3) == glam::DVec4::new(0.0, 0.0, 0.0, 1.0);
-        if !rigid {
-            return Err(node.err(
-                "a sensor's to_world must be a rigid transform (rotation and translation, no scale or shear)",
-            ));
+        // Mitsuba refuses scale in a camera transform.
+        if !is_rigid(&m) {
+            return Err(node.err(NOT_RIGID));
         }
         s.to_world = to_mat4(node, m)?;
     }
@@ -165,13 +157,8 @@ fn sampler(ctx: &Ctx, n: &XNode, s: &mut SensorDesc) -> Result<(), SceneError> {
     check_object_attrs(n)?;
     plugin_type(n, "sampler", &["independent"])?;
     let p = Props::new(n, &ctx.ids, &["sample_count", "seed"])?;
-    s.spp = p.int_in(
-        "sample_count",
-        4,
-        |v| (1..=u32::MAX as i64).contains(&v),
-        "1 <= sample_count <= 2^32-1",
-    )? as u32;
-    s.seed = p.int_in("seed", 0, |v| v >= 0, "seed >= 0")? as u64;
+    s.spp = p.int_in("sample_count", 4, SAMPLE_COUNT)? as u32;
+    s.seed = p.int_in("seed", 0, SEED)? as u64;
     p.finish()
 }
 
@@ -193,14 +180,10 @@ fn film(ctx: &Ctx, n: &XNode, s: &mut SensorDesc) -> Result<(), SceneError> {
             "crop_height",
         ],
     )?;
-    let range = format!("1 <= value <= {MAX_FILM_SIDE}");
-    let w = p.int_in("width", 768, |v| (1..=MAX_FILM_SIDE).contains(&v), &range)?;
-    let h = p.int_in("height", 576, |v| (1..=MAX_FILM_SIDE).contains(&v), &range)?;
+    let w = p.int_in("width", 768, FILM_SIDE)?;
+    let h = p.int_in("height", 576, FILM_SIDE)?;
     if w * h > MAX_FILM_PIXELS {
-        return Err(n.err(format!(
-            "film of {w}x{h} = {} pixels is larger than the limit of {MAX_FILM_PIXELS} pixels",
-            w * h
-        )));
+        return Err(n.err(film_too_large(w, h)));
     }
     s.width = w as u32;
     s.height = h as u32;
@@ -246,20 +229,10 @@ fn rfilter(ctx: &Ctx, n: &XNode) -> Result<FilterDesc, SceneError> {
     let p = Props::new(n, &ctx.ids, known)?;
     let f = match ty {
         "gaussian" => FilterDesc::Gaussian {
-            stddev: p.float_in(
-                "stddev",
-                0.5,
-                |v| v > 0.0 && v <= 64.0,
-                "0 < stddev <= 64 pixels",
-            )? as f32,
+            stddev: p.float_in("stddev", 0.5, GAUSSIAN_STDDEV)? as f32,
         },
         "tent" => FilterDesc::Tent {
-            radius: p.float_in(
-                "radius",
-                1.0,
-                |v| v > 0.0 && v <= 256.0,
-                "0 < radius <= 256 pixels",
-            )? as f32,
+            radius: p.float_in("radius", 1.0, TENT_RADIUS)? as f32,
         },
         _ => FilterDesc::Box,
     };

@@ -45,6 +45,7 @@ use super::mesh;
 use super::props::Props;
 use crate::desc::*;
 use crate::error::SceneError;
+use crate::validate::{is_similarity, NOT_SIMILARITY, SPHERE_RADIUS};
 use glam::{DVec3, Mat4};
 use std::sync::Arc;
 
@@ -76,30 +77,14 @@ pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDes
             if let Some(e) = p.take("to_world") {
                 // Mitsuba keeps a sphere round whatever the to_world (it
                 // warns and drops non-uniform scale); we refuse it instead.
-                // The linear part must be a scaled rotation: M^T M = s² I,
-                // to 1e-4 relative (6-digit matrices pass).
                 let m = e.transform()?;
-                let cols = [
-                    m.x_axis.truncate(),
-                    m.y_axis.truncate(),
-                    m.z_axis.truncate(),
-                ];
-                let s2 = cols[0].length_squared();
-                let tol = 1e-4 * s2;
-                let similar = (cols[1].length_squared() - s2).abs() <= tol
-                    && (cols[2].length_squared() - s2).abs() <= tol
-                    && cols[0].dot(cols[1]).abs() <= tol
-                    && cols[0].dot(cols[2]).abs() <= tol
-                    && cols[1].dot(cols[2]).abs() <= tol;
-                if !similar {
-                    return Err(e.node.err(
-                        "a sphere's to_world must not contain non-uniform scale or shear (use the 'radius' parameter, or a mesh for an ellipsoid)",
-                    ));
+                if !is_similarity(&m) {
+                    return Err(e.node.err(NOT_SIMILARITY));
                 }
                 to_world = to_invertible_mat4(e.node, m)?;
             }
             let center = p.vec3("center")?.map(|(v, _)| v).unwrap_or([0.0; 3]);
-            let radius = p.float_in("radius", 1.0, |v| v > 0.0, "radius > 0")?;
+            let radius = p.float_in("radius", 1.0, SPHERE_RADIUS)?;
             GeometryDesc::Sphere {
                 center: DVec3::from(center).as_vec3(),
                 radius: radius as f32,

@@ -9,9 +9,10 @@
 
 use super::context::{check_object_attrs, rgb, to_invertible_mat4, Ctx};
 use super::document::XNode;
-use super::props::{Entry, Props};
+use super::props::{check_rgb, Entry, Props};
 use crate::desc::*;
 use crate::error::{SceneError, SceneErrorKind};
+use crate::validate::Range;
 use glam::Mat4;
 use std::sync::Arc;
 
@@ -28,42 +29,29 @@ pub(crate) fn volume_of(
     p: &Props,
     name: &str,
     default: f64,
-    ok: impl Fn(f64) -> bool + Copy,
-    range: &str,
+    r: Range<f64>,
 ) -> Result<VolumeDesc, SceneError> {
     let Some(e) = take_named_volume(p, name) else {
         return Ok(VolumeDesc::Constant([default as f32; 3]));
     };
     if e.is_property() {
-        let c = e.color()?;
-        if !c.iter().all(|&v| ok(v)) {
-            return Err(e.node.err(format!(
-                "invalid {name} = ({}, {}, {}) (valid: each channel {range})",
-                c[0], c[1], c[2]
-            )));
-        }
+        let c = check_rgb(e.node, name, e.color()?, r)?;
         return Ok(VolumeDesc::Constant(rgb(c)));
     }
-    volume(ctx, e.target, name, ok, range)
+    volume(ctx, e.target, name, r)
 }
 
-fn volume(
-    ctx: &Ctx,
-    n: &XNode,
-    name: &str,
-    ok: impl Fn(f64) -> bool,
-    range: &str,
-) -> Result<VolumeDesc, SceneError> {
+fn volume(ctx: &Ctx, n: &XNode, name: &str, r: Range<f64>) -> Result<VolumeDesc, SceneError> {
     check_object_attrs(n)?;
     let ty = n.attr("type").unwrap_or("");
     match ty {
         "constvolume" => {
             let p = Props::new(n, &ctx.ids, &["value"])?;
-            let c = p.color_in("value", [1.0; 3], ok, range)?;
+            let c = p.color_in("value", [1.0; 3], r)?;
             p.finish()?;
             Ok(VolumeDesc::Constant(rgb(c)))
         }
-        "gridvolume" => Ok(VolumeDesc::Grid(gridvolume(ctx, n, name, ok, range)?)),
+        "gridvolume" => Ok(VolumeDesc::Grid(gridvolume(ctx, n, name, r)?)),
         _ => Err(n.err(format!(
             "unknown volume type '{ty}' (supported: gridvolume, constvolume)"
         ))),
@@ -74,8 +62,7 @@ pub(crate) fn gridvolume(
     ctx: &Ctx,
     n: &XNode,
     name: &str,
-    ok: impl Fn(f64) -> bool,
-    range: &str,
+    r: Range<f64>,
 ) -> Result<GridVolumeDesc, SceneError> {
     let p = Props::new(
         n,
@@ -126,13 +113,14 @@ pub(crate) fn gridvolume(
             ),
         ));
     }
-    if let Some(i) = grid.data.iter().position(|&v| !ok(v as f64)) {
+    if let Some(i) = grid.data.iter().position(|&v| !(r.ok)(v as f64)) {
         return Err(fnode.err_kind(
             SceneErrorKind::Format,
             format!(
-                "grid '{}' value #{i} = {} is out of range for '{name}' (valid: {range})",
+                "grid '{}' value #{i} = {} is out of range for '{name}' (valid: {})",
                 path.display(),
-                grid.data[i]
+                grid.data[i],
+                r.text
             ),
         ));
     }

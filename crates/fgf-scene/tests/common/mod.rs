@@ -38,3 +38,51 @@ pub fn has(msg: &str, parts: &[&str]) {
         assert!(msg.contains(p), "message lacks {p:?}:\n{msg}");
     }
 }
+
+/// A valid scene built in code: `volpath`, a 32×24 camera at the origin,
+/// one unit cube (diffuse 0.5) and no media or emitters.
+pub fn minimal_scene() -> fgf_scene::SceneDesc {
+    use fgf_scene::*;
+    SceneDesc {
+        source: "in-code scene".into(),
+        integrator: IntegratorDesc {
+            kind: IntegratorKind::Volpath,
+            max_depth: -1,
+            rr_depth: 5,
+            hide_emitters: false,
+        },
+        sensor: SensorDesc {
+            to_world: glam::Mat4::IDENTITY,
+            fov: 45.0,
+            fov_axis: FovAxis::X,
+            near_clip: 0.01,
+            far_clip: 100.0,
+            width: 32,
+            height: 24,
+            rfilter: FilterDesc::Box,
+            spp: 4,
+            seed: 0,
+            medium: None,
+        },
+        shapes: vec![cube(0, None)],
+        bsdfs: vec![BsdfDesc::Diffuse {
+            reflectance: [0.5; 3],
+        }],
+        emitters: Vec::new(),
+        media: Vec::new(),
+    }
+}
+
+/// A unit cube at `z = 5` with BSDF `bsdf` and medium `interior`.
+pub fn cube(bsdf: usize, interior: Option<usize>) -> fgf_scene::ShapeDesc {
+    fgf_scene::ShapeDesc {
+        name: "cube".into(),
+        geometry: fgf_scene::GeometryDesc::Cube,
+        to_world: glam::Mat4::from_translation(glam::Vec3::new(0.0, 0.0, 5.0)),
+        flip_normals: false,
+        bsdf,
+        emitter: None,
+        interior,
+        exterior: None,
+    }
+}

@@ -31,6 +31,7 @@ pub(crate) use ply::load_ply;
 use super::document::XNode;
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
+use crate::validate::{mesh_problem, MeshProblem};
 use glam::{Mat3, Mat4, Vec3};
 use std::path::Path;
 
@@ -43,46 +44,30 @@ pub(super) fn read_file(fnode: &XNode, path: &Path, what: &str) -> Result<Vec<u8
     })
 }
 
-/// Check and normalise a mesh; `Err` is a message about the file's content.
+/// Check and normalise a mesh (by the rules of [`mesh_problem`]); `Err` is
+/// a message about the file's content.
 pub(super) fn finish(
     positions: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
     indices: Vec<[u32; 3]>,
 ) -> Result<TriangleMesh, String> {
-    if indices.is_empty() {
-        return Err("the mesh has no faces".into());
-    }
-    if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
-        return Err(format!("vertex #{i} position is not finite"));
-    }
-    let n = positions.len();
-    if let Some(t) = indices.iter().find(|t| t.iter().any(|&i| i as usize >= n)) {
-        return Err(format!(
-            "face index {:?} is out of range (the mesh has {n} vertices)",
-            t
-        ));
-    }
-    let normals = match normals {
-        Some(ns) => {
-            let mut out = Vec::with_capacity(ns.len());
-            for (i, v) in ns.iter().enumerate() {
-                let len = v.length();
-                if !(len.is_finite() && len > 0.0) {
-                    return Err(format!(
-                        "vertex normal #{i} is zero or not finite (use face_normals=\"true\" to ignore the file's normals)"
-                    ));
-                }
-                out.push(*v / len);
-            }
-            Some(out)
-        }
-        None => None,
-    };
-    Ok(TriangleMesh {
+    let mut m = TriangleMesh {
         positions,
         normals,
         indices,
-    })
+    };
+    match mesh_problem(&m) {
+        Some(p @ MeshProblem::Normal(_)) => Err(format!(
+            "{p} (use face_normals=\"true\" to ignore the file's normals)"
+        )),
+        Some(p) => Err(p.to_string()),
+        None => {
+            for v in m.normals.iter_mut().flatten() {
+                *v /= v.length();
+            }
+            Ok(m)
+        }
+    }
 }
 
 /// Angle between two unit vectors, accurate for small and large angles
