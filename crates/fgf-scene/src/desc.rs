@@ -1,7 +1,10 @@
 //! The plain-data scene description: what the XML loader produces and the
 //! renderer consumes. Everything is already resolved: `$name` defaults are
 //! substituted, references are indices, file paths are loaded, transforms
-//! are composed, units are Mitsuba's (degrees for angles, radiance in W/(m² sr)).
+//! are composed. Units are those of the loader's tables (see
+//! [`crate::xml`]: lengths in scene units, angles in degrees). A
+//! description built in code must pass [`SceneDesc::validate`], which the
+//! renderer calls before it compiles one.
 //!
 //! Colours are linear RGB (`[f32; 3]`); a float in the XML becomes a grey RGB.
 //! Matrices are `glam::Mat4` (column-major in memory, `M * p` convention);
@@ -35,7 +38,7 @@ pub struct SceneDesc {
 pub enum IntegratorKind {
     /// `volpath`: volumetric path tracing with NEE + MIS.
     Volpath,
-    /// `path`: surfaces only; a scene with media and `path` is rejected by the loader.
+    /// `path`: surfaces only; a scene with media and `path` is invalid.
     Path,
 }
 
@@ -240,9 +243,9 @@ pub enum VolumeDesc {
 
 #[derive(Debug, Clone)]
 pub struct GridVolumeDesc {
-    /// The loaded grid: 1 or 3 channels (6-channel grids are refused), every
-    /// value checked by the loader (`sigma_t` and `density` >= 0, `albedo` in
-    /// [0, 1]); its to_world is invertible in f32.
+    /// The grid: 1 or 3 channels (1 for a `density`), its values finite and
+    /// `>= 0` (`sigma_t`, `density`) or in [0, 1] (`albedo`); `to_world` is
+    /// invertible in f32 (see [`SceneDesc::validate`]).
     pub grid: Arc<fgf_io::vol::VolGrid>,
     /// Volume-space to world. Unless `use_grid_bbox`, the grid spans the unit
     /// cube `[0,1]^3` in volume space; with it, the file's bounding box.
@@ -273,10 +276,10 @@ pub enum KernelDesc {
 pub enum TransmittanceDesc {
     /// `fgf` plugin: `hurst`, `sw`, optional `length` (k-fBm only; default:
     /// the diagonal of the bounding box of the shapes bounding this medium).
-    /// The loader resolves the default: `length` is always `Some` for k-fBm
-    /// (`hurst > 0`) and always `None` for white and pink noise, and the
-    /// parameters were accepted by `fgf_core::transmittance::Fgf::new` for
-    /// every channel's `sigma_t`.
+    /// The loader resolves the default: `length` is `Some` for k-fBm
+    /// (`hurst > 0`) and `None` for white and pink noise, as
+    /// `fgf_core::transmittance::Fgf::new` requires of every channel's model
+    /// (see [`SceneDesc::validate`]).
     Fgf {
         hurst: f64,
         sw: f64,

@@ -13,7 +13,7 @@
 //! produced, and `fgf_render`'s `World::build` calls it on the one it is
 //! given, so a scene built in code meets the same rules as a loaded one.
 //! The loader also checks each parameter where it reads it, with the same
-//! [`Range`]s, so that the message points at the parameter's own line and
+//! ranges, so that the message points at the parameter's own line and
 //! shows the value as written (before `scale`, before rounding to f32);
 //! what only this module checks (the models, references between objects,
 //! the integrator against the media) it reports at the line of the plugin,

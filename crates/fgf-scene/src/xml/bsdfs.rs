@@ -1,8 +1,35 @@
-//! `<bsdf>`.
+//! `<bsdf>`: `diffuse` (Lambertian, one-sided: black seen from the back),
+//! `null` (an index-matched boundary that paths cross unchanged, for media
+//! boundaries), `dielectric` (smooth), `conductor` (a smooth metal) and
+//! `twosided` (the nested BSDF on both sides). A `<bsdf>` at the top level
+//! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
+//! shape is described in [`super::shapes`].
 //!
-//! | element | types | parameters (default) |
-//! |---|---|---|
-//! | `bsdf` | `diffuse`, `null`, `dielectric`, `conductor`, `twosided` | diffuse `reflectance` (0.5, in \[0, 1\]); dielectric `int_ior` ("bk7"), `ext_ior` ("air"), numbers > 0 or names from Mitsuba's table, `specular_reflectance` (1), `specular_transmittance` (1); conductor `material` ("none" = perfect mirror, or a Mitsuba name such as "Au") or `eta` (0) and `k` (1), `specular_reflectance` (1); twosided: one nested BSDF. |
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | `diffuse` | `reflectance` | float or rgb | – | in [0, 1] | 0.5 | |
+//! | `dielectric` | `int_ior`, `ext_ior` | float or string | – | a number > 0 or a name of Mitsuba's table (`"water"`, `"bk7"`, `"diamond"`, ...) | `"bk7"` (1.5046), `"air"` (1.000277) | index of refraction inside and outside |
+//! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float or rgb | – | in [0, 1] | 1, 1 | |
+//! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
+//! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
+//! | `conductor` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | |
+//! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
+//!
+//! ```xml
+//! <bsdf type="twosided" id="gold">
+//!     <bsdf type="conductor"><string name="material" value="Au"/></bsdf>
+//! </bsdf>
+//! <shape type="sphere"><ref id="gold"/></shape>
+//! <shape type="rectangle">
+//!     <bsdf type="diffuse"><rgb name="reflectance" value="$albedo"/></bsdf>
+//! </shape>
+//! <default name="albedo" value="0.2, 0.25, 0.7"/>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! img = fgf.render("scene.xml", defines={"albedo": "0.8, 0.8, 0.8"})
+//! ```
 
 use super::context::{check_object_attrs, plugin_type, rgb, Ctx};
 use super::document::XNode;

@@ -1,8 +1,39 @@
-//! `<emitter>`.
+//! `<emitter>`: `area` (nested in the `<shape>` that emits; it emits toward
+//! the side its normal points to), and at the top level `point`, `spot`,
+//! `directional` and `constant` (a uniform environment; at most one). Every
+//! colour is `≥ 0` in each channel; radiometric units are described in
+//! [`super`].
 //!
-//! | element | types | parameters (default) |
-//! |---|---|---|
-//! | `emitter` | `area` (in a shape), `point`, `spot`, `directional`, `constant` | area `radiance` (1); point `intensity` (1), `position` or `to_world`; spot `intensity` (1), `to_world`, `cutoff_angle` (20°, in (0, 180)), `beam_width` (0.75·cutoff, in [0, cutoff]); directional `irradiance` (1), `direction` or `to_world` (local +z); constant `radiance` (1). Colours ≥ 0. |
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | `area`, `constant` | `radiance` | float or rgb | power/(length² sr) | ≥ 0 | 1 | |
+//! | `point` | `intensity` | float or rgb | power/sr | ≥ 0 | 1 | |
+//! | `point` | `position` or `to_world` | point or transform | length | – | the origin | the light's position (the translation of `to_world`); not both |
+//! | `spot` | `intensity` | float or rgb | power/sr | ≥ 0 | 1 | on the axis |
+//! | `spot` | `to_world` | transform | – | invertible | identity | the spot shines down its local +z |
+//! | `spot` | `cutoff_angle` | float | degrees | 0 < cutoff_angle < 180 | 20 | no light beyond it |
+//! | `spot` | `beam_width` | float | degrees | 0 ≤ beam_width ≤ cutoff_angle | 0.75 · cutoff_angle | full intensity within it, then falling linearly in the angle to 0 at `cutoff_angle` |
+//! | `directional` | `irradiance` | float or rgb | power/length² | ≥ 0 | 1 | on a surface facing the light |
+//! | `directional` | `direction` or `to_world` | vector or transform | – | a nonzero vector | +z (the local +z of `to_world`) | the direction the light travels in; not both |
+//!
+//! ```xml
+//! <emitter type="spot">
+//!     <rgb name="intensity" value="$power"/>
+//!     <float name="cutoff_angle" value="30"/>
+//!     <transform name="to_world">
+//!         <lookat origin="0, 4, 0" target="0, 0, 0" up="0, 0, 1"/>
+//!     </transform>
+//! </emitter>
+//! <shape type="rectangle">
+//!     <emitter type="area"><rgb name="radiance" value="10"/></emitter>
+//! </shape>
+//! <default name="power" value="50"/>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! img = fgf.render("scene.xml", defines={"power": 200})
+//! ```
 
 use super::context::{check_object_attrs, plugin_type, rgb, to_invertible_mat4, to_mat4, Ctx};
 use super::document::XNode;

@@ -1,8 +1,26 @@
-//! `<integrator>`.
+//! `<integrator>`: `volpath` (volumetric path tracing: surfaces and media)
+//! and `path` (surfaces only). A scene without an `<integrator>` gets
+//! Mitsuba's default, `path`, so a scene with media needs
+//! `<integrator type="volpath">`; `path` in a scene with media is an error.
+//! Both follow Mitsuba 3's semantics (see `fgf_render::integrator`).
 //!
-//! | element | types | parameters (default) |
-//! |---|---|---|
-//! | `integrator` | `volpath`, `path` | `max_depth` (-1 = unbounded, else ≥ 0), `rr_depth` (5, ≥ 1), `hide_emitters` (false). `path` in a scene with media is an error (use `volpath`). Default integrator: `path`. |
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | both | `max_depth` | integer | – | −1, or 0 … 2³¹−1 | −1 (unbounded) | a path with `d` scattering events and non-null surface interactions contributes if `d < max_depth`: 1 shows the emitters seen directly, 2 adds direct lighting |
+//! | both | `rr_depth` | integer | – | 1 … 2³²−1 | 5 | Russian roulette once the depth exceeds it |
+//! | both | `hide_emitters` | boolean | – | – | false | emitters seen directly (also through media and null boundaries) are black |
+//!
+//! ```xml
+//! <default name="max_depth" value="64"/>
+//! <integrator type="volpath">
+//!     <integer name="max_depth" value="$max_depth"/>
+//! </integrator>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! img = fgf.render("scene.xml", defines={"max_depth": 2})  # single scattering
+//! ```
 
 use super::context::{check_object_attrs, plugin_type, Ctx};
 use super::document::XNode;

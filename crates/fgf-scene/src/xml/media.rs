@@ -1,16 +1,47 @@
-//! Media: `homogeneous` and `heterogeneous` here; the non-exponential
-//! `fgf` and `nonexponential` in [`super::nonexp`].
+//! `<medium>`: the classical (exponential) media `homogeneous` and
+//! `heterogeneous`, as in Mitsuba 3.9; the non-exponential `fgf` and
+//! `nonexponential` are in [`super::nonexp`]. A medium is nested in a
+//! `<shape>` as its `interior` or `exterior`, or in the `<sensor>` (the
+//! camera's medium), or defined at the top level with an `id` and used by
+//! `<ref>`; it needs `<integrator type="volpath">`. Mitsuba 3 media have
+//! no `sigma_s`/`sigma_a`: give `sigma_t = sigma_s + sigma_a` and
+//! `albedo = sigma_s / sigma_t` instead.
 //!
-//! # Classical media (as in Mitsuba 3.9)
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | both | `sigma_t` | float or rgb; `heterogeneous`: or a nested `volume` | 1/length | ≥ 0 | 1 | extinction, times `scale` |
+//! | both | `albedo` | float or rgb; `heterogeneous`: or a nested `volume` | – | in [0, 1] | 0.75 | single-scattering albedo |
+//! | both | `scale` | float | – | ≥ 0 | 1 | multiplies `sigma_t` |
+//! | both | `sample_emitters` | boolean | – | – | true | accepted; it does not change the expected image |
+//! | both | nested `phase` | – | – | one, see [`super::phase`] | isotropic | |
 //!
-//! | type | parameters (default) |
-//! |---|---|
-//! | `homogeneous` | `sigma_t` (1; float or rgb, ≥ 0, in 1/length), `albedo` (0.75; float or rgb in [0, 1]), `scale` (1, ≥ 0, multiplies `sigma_t`), `sample_emitters` (true; accepted, no effect on the expected image), nested `phase` (isotropic). |
-//! | `heterogeneous` | `sigma_t` and `albedo` as above or a nested `<volume>`, `scale`, `sample_emitters`, `phase`. |
+//! `homogeneous` takes constants (a `constvolume` too). `heterogeneous`
+//! takes the volumes of [`super::volumes`]: a grid `sigma_t` with a
+//! constant or grid `albedo`; with two constants it is homogeneous, and a
+//! constant `sigma_t` with a grid `albedo` is not supported by the renderer.
 //!
-//! Mitsuba 3 has no `sigma_s`/`sigma_a` parameters; they are refused with
-//! the conversion `sigma_t = sigma_s + sigma_a`, `albedo = sigma_s / sigma_t`.
+//! ```xml
+//! <shape type="cube">
+//!     <bsdf type="null"/>
+//!     <medium type="heterogeneous" name="interior">
+//!         <volume type="gridvolume" name="sigma_t">
+//!             <string name="filename" value="density64.vol"/>
+//!             <!-- the grid's unit cube onto the shape's [-1, 1]^3 -->
+//!             <transform name="to_world">
+//!                 <scale value="2"/><translate value="-1, -1, -1"/>
+//!             </transform>
+//!         </volume>
+//!         <float name="scale" value="$density"/>
+//!         <rgb name="albedo" value="0.8"/>
+//!     </medium>
+//! </shape>
+//! <default name="density" value="4"/>
+//! ```
 //!
+//! ```python
+//! import fgf
+//! img = fgf.render("scenes/reference/cube-heterogeneous.xml", spp=16, defines={"res": 64})
+//! ```
 
 use super::context::{check_object_attrs, rgb, Ctx};
 use super::document::XNode;

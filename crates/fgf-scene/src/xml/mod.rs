@@ -1,4 +1,5 @@
-//! Mitsuba 3 XML loader (issue 4): XML -> [`crate::desc::SceneDesc`].
+//! The Mitsuba 3 XML loader: a scene file to a validated
+//! [`SceneDesc`].
 //!
 //! ```no_run
 //! use std::path::Path;
@@ -25,25 +26,43 @@
 //!   `"0.1, 0.2, 0.3"` or `"0.1 0.2 0.3"`), `spectrum` (one uniform value
 //!   only), `point`/`vector` (`x y z` attributes or `value`), `transform`
 //!   (`translate`, `rotate`, `scale`, `matrix`, `lookat`; the composed
-//!   matrix is `M_last · … · M_first`).
-//! * Plugins: one module per family, each with its table: [`integrators`],
-//!   [`sensors`] (sensor, film, sampler, filters), [`shapes`], [`bsdfs`],
-//!   [`emitters`], [`media`], [`nonexp`] (fgf's non-exponential `fgf` and
-//!   `nonexponential` media), [`volumes`] and [`phase`].
+//!   matrix is `M_last · … · M_first`; see `transform.rs`).
+//! * Plugins: one module per family, each opening with the family's
+//!   parameter table (units, valid range, default) and an XML and a Python
+//!   example: [`integrators`], [`sensors`] (sensor, film, sampler, filters),
+//!   [`shapes`], [`bsdfs`], [`emitters`], [`media`] (`homogeneous`,
+//!   `heterogeneous`), [`nonexp`] (fgf's non-exponential `fgf` and
+//!   `nonexponential`), [`volumes`] and [`phase`].
 //! * Mitsuba defaults that change images and are easy to miss: a shape
 //!   with an `area` emitter and no `bsdf` is black (diffuse reflectance 0,
 //!   not 0.5); an `obj`/`ply` without vertex normals is smooth-shaded with
 //!   computed angle-weighted normals unless `face_normals="true"` (both in
-//!   [`shapes`]); a `rotate` axis is not normalised (see `transform`).
+//!   [`shapes`]); a `rotate` axis is not normalised.
+//!
+//! # Units
+//!
+//! The tables use the same units everywhere. Distances are in the scene's
+//! unit of length, written `length` (positions, radii, clip distances,
+//! `length` itself), so extinction coefficients are in `1/length`. Angles
+//! are in degrees, film sizes and filter radii in pixels, and colours are
+//! linear RGB. The renderer has no physical power unit: radiance is in
+//! `power/(length² sr)`, intensity in `power/sr` and irradiance in
+//! `power/length²` of one arbitrary power unit, as in Mitsuba. A float
+//! where a colour is expected is a grey colour.
 //!
 //! # Stages
 //!
-//! 1. `document`: parse the XML with `roxmltree`, expand `<include>`,
+//! 1. `document.rs`: parse the XML with `roxmltree`, expand `<include>`,
 //!    apply `<default>`s and `$name` substitution, into an owned tree of
 //!    `XNode`s that remember their file and line.
-//! 2. the plugin families: instantiate each plugin from its children
-//!    through `props::Props`, which type-checks every parameter and reports
-//!    the unknown ones.
+//! 2. The plugin families instantiate each plugin from its children
+//!    through `props.rs`, which type-checks every parameter, reports the
+//!    unknown ones, and checks each value against the range of
+//!    [`validate`](crate::validate) that applies to it, at its own line.
+//! 3. [`SceneDesc::validate`](crate::desc::SceneDesc::validate)'s rules on
+//!    the whole description (references, the integrator against the media,
+//!    the transmittance models), reported at the plugin's or parameter's
+//!    line.
 
 pub mod bsdfs;
 mod context;

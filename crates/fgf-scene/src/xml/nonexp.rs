@@ -1,52 +1,50 @@
-//! Non-exponential media.
+//! fgf's non-exponential media, `fgf` and `nonexponential`: usable wherever
+//! a classical medium is (see [`super::media`]), with
+//! `<integrator type="volpath">`.
 //!
-//! # `fgf`: a fractional-Gaussian-field medium
+//! * `fgf`: extinction `σ_t(x) = σ_m + σ_u(x)`, where `σ_u` is a zero-mean
+//!   fractional Gaussian field of Hurst parameter `H` and white-noise
+//!   strength `S_w` (`theory.md` §1–2). The renderer uses its
+//!   ensemble-averaged, non-exponential transmittance, the gamma closure of
+//!   `theory.md` §3, with the transport kernel chosen by `kernel`
+//!   (`theory.md` §4).
+//! * `nonexponential`: a named transmittance model of optical depth
+//!   `τ = σ_m t`: `exponential`, `exp(−τ)`; `davis`, the Davis power law
+//!   `(1 + τ/α)^(−α)` (`theory.md` §3, the form of k-fBm); or
+//!   `davis_weinstein` (Bitterli 2018; `theory.md` §3, the form of pink
+//!   noise with `h = H + 1`).
 //!
-//! Extinction `σ_t(x) = σ_m + σ_u(x)` where `σ_u` is a zero-mean FGF of
-//! Hurst parameter `H` and white-noise strength `S_w` (`theory.md` §1–2).
-//! The renderer uses the ensemble-averaged, non-exponential transmittance
-//! of `theory.md` §3 (gamma closure) with the kernel chosen by `kernel`
-//! (`theory.md` §4).
+//! The model parameters are those of `fgf_core::transmittance` (`Fgf`,
+//! `Exponential`, `Davis`, `DavisWeinstein`), whose constructors accept or
+//! refuse them for every colour channel's `σ_m`.
 //!
-//! | parameter | meaning | units | valid range | default |
-//! |---|---|---|---|---|
-//! | `sigma_t` | mean extinction `σ_m` (float or rgb), times `scale` | 1/length | > 0 | 1 |
-//! | `albedo` | single-scattering albedo Λ (float or rgb) | – | [0, 1] | 0.75 |
-//! | `scale` | multiplies `sigma_t` | – | > 0 | 1 |
-//! | `hurst` | Hurst parameter `H`: −0.5 white noise, (−0.5, 0) pink noise, (k−1, k) k-fBm | – | −0.5 ≤ H < 1000, not 0, not an integer | required |
-//! | `sw` | white-noise strength `S_w` | length^(−2H−2) (so that `var[σ̄_t]` is in 1/length²) | > 0 | required |
-//! | `length` | k-fBm only: characteristic length `L` of the medium (`var[σ̄_t] = S_kf L^(2H)`) | length | > 0; an error on white/pink media | diagonal of the bounding box of the shapes that have this medium as `interior` |
-//! | `kernel` | `energy_conserving` (Guo 2019 / Jarabo 2018) or `reciprocal` (Bitterli 2018) | – | – | `energy_conserving` |
-//! | `phase` | nested phase function | – | isotropic, hg | isotropic |
-//! | `density` | optional nested `<volume type="gridvolume" name="density">` (1 channel, ≥ 0): macro-scale density `ρ(x)`, `σ_m(x) = σ_m ρ(x)` (`theory.md` §4) | – | – | none (uniform) |
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | both | `sigma_t` | float or rgb | 1/length | > 0 | 1 | mean extinction `σ_m`, times `scale` |
+//! | both | `albedo` | float or rgb | – | in [0, 1] | 0.75 | single-scattering albedo `Λ` |
+//! | both | `scale` | float | – | > 0 | 1 | multiplies `sigma_t` |
+//! | both | `kernel` | string | – | `energy_conserving` (Guo 2019 / Jarabo 2018), `reciprocal` (Bitterli 2018) | `energy_conserving` | transport kernel |
+//! | both | nested `phase` | – | – | one, see [`super::phase`] | isotropic | |
+//! | both | nested `volume name="density"` | `gridvolume` | – | 1 channel, values ≥ 0 | none (`ρ = 1`) | macro-scale density `ρ(x)`: `σ_m(x) = σ_m ρ(x)` (`theory.md` §4); see [`super::volumes`] |
+//! | `fgf` | `hurst` | float | – | −0.5 (white noise), (−0.5, 0) (pink noise), or (0, 1000) not an integer (k-fBm, `k = ⌈H⌉`) | required | Hurst parameter `H` |
+//! | `fgf` | `sw` | float | length^(−2H−2) (so that `var[σ̄_t]` is in 1/length²) | > 0 | required | white-noise strength `S_w` |
+//! | `fgf` | `length` | float | length | > 0; k-fBm only (an error for white and pink noise) | the diagonal of the bounding box of the shapes that have the medium as `interior` | characteristic length `L`: `var[σ̄_t] = S_kf L^(2H)` |
+//! | `nonexponential` | `transmittance` | string | – | `exponential`, `davis`, `davis_weinstein` | required | the model |
+//! | `nonexponential` | `alpha` | float | – | > 0 | required by `davis` | Davis exponent `α` |
+//! | `nonexponential` | `h`, `c` | float | – | 0.5 ≤ h ≤ 1, c > 0 | required by `davis_weinstein` | Davis–Weinstein parameters |
 //!
 //! ```xml
+//! <default name="hurst" value="-0.1"/>
 //! <shape type="cube">
 //!     <bsdf type="null"/>
 //!     <medium type="fgf" name="interior">
 //!         <float  name="sigma_t" value="4.0"/>
 //!         <rgb    name="albedo"  value="0.8"/>
-//!         <float  name="hurst"   value="-0.1"/>   <!-- pink noise -->
+//!         <float  name="hurst"   value="$hurst"/>   <!-- pink noise -->
 //!         <float  name="sw"      value="4.0"/>
 //!         <string name="kernel"  value="energy_conserving"/>
-//!         <phase type="isotropic"/>
 //!     </medium>
 //! </shape>
-//! ```
-//!
-//! # `nonexponential`: a named transmittance model
-//!
-//! The same `sigma_t`, `albedo`, `scale`, `kernel`, `phase` and `density`
-//! as `fgf`, and `transmittance` (required) with its own parameters, in
-//! optical depth `τ = σ_m t`:
-//!
-//! | `transmittance` | parameters | `Tr(τ)` |
-//! |---|---|---|
-//! | `exponential` | – | `exp(−τ)` |
-//! | `davis` | `alpha` > 0 | `(1 + τ/α)^(−α)` (Davis power law; `theory.md` §3, k-fBm) |
-//! | `davis_weinstein` | `h` in [0.5, 1], `c` > 0 | Davis–Weinstein (Bitterli 2018; `theory.md` §3, pink noise with `h = H+1`) |
-//!
-//! ```xml
 //! <medium type="nonexponential" id="cloud">
 //!     <string name="transmittance" value="davis"/>
 //!     <float  name="alpha"   value="2.0"/>
@@ -55,16 +53,14 @@
 //! </medium>
 //! ```
 //!
-//! From Python and the CLI, both render like any other scene. With
-//! `<default name="hurst" value="-0.1"/>` and `value="$hurst"` in the
-//! medium, a sweep needs no edit of the file
-//! (`fgf render scene.xml -o out.exr -D hurst=0.2` on the command line):
+//! A sweep needs no edit of the file (`fgf render scene.xml -o out.exr
+//! -D hurst=0.2` on the command line):
 //!
 //! ```python
 //! import fgf
 //! for hurst in ["-0.1", "0.2", "1.2"]:
 //!     img = fgf.render("scene.xml", spp=64, seed=0, defines={"hurst": hurst})
-//!     # img: (H, W, 3) float32 numpy array, linear RGB
+//! mean, se = fgf.ensemble("scenes/fgf-cube-pink.xml", realizations=16)  # ground truth
 //! ```
 
 use super::context::{rgb, Ctx};

@@ -1,6 +1,22 @@
-//! Phase functions.
+//! `<phase>`: the phase function of a medium, nested in the `<medium>`
+//! (see [`super::media`] and [`super::nonexp`]): `isotropic`, the default,
+//! or `hg` (Henyey–Greenstein).
 //!
-//! Phase functions: `isotropic`; `hg` with `g` (0.8, in (-1, 1)).
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | `hg` | `g` | float | – | −1 < g < 1 | 0.8 | mean cosine of the scattering angle: > 0 forward, < 0 backward |
+//!
+//! ```xml
+//! <medium type="homogeneous" name="interior">
+//!     <phase type="hg"><float name="g" value="$g"/></phase>
+//! </medium>
+//! <default name="g" value="0.3"/>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! img = fgf.render("scene.xml", defines={"g": -0.5})  # backward scattering
+//! ```
 
 use super::context::{check_object_attrs, Ctx};
 use super::props::Props;

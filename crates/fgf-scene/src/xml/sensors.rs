@@ -1,11 +1,47 @@
-//! `<sensor>` with its `<film>`, `<sampler>` and `<rfilter>`.
+//! `<sensor type="perspective">` with its nested `<film type="hdrfilm">`,
+//! `<sampler type="independent">` and the film's `<rfilter>` (`box`: a
+//! pixel-wide box; `gaussian`, the default; `tent`). A scene without a
+//! `<sensor>` gets Mitsuba's default camera: at the origin looking down +z,
+//! 768 × 576 pixels, 50 mm focal length, 4 samples per pixel. The camera
+//! looks down its local +z with local +y up (what `lookat` builds).
 //!
-//! | element | types | parameters (default) |
-//! |---|---|---|
-//! | `sensor` | `perspective` | `fov` (degrees, 0 < fov < 180) or `focal_length` (`"50mm"`, 35 mm film equivalent, the default), `fov_axis` (`x`, `y`, `smaller`, `larger`; `x`), `near_clip` (0.01), `far_clip` (10000), `to_world` (rigid); nested `sampler`, `film` and one `medium` (the camera's). |
-//! | `sampler` | `independent` | `sample_count` (4, ≥ 1), `seed` (0, ≥ 0) |
-//! | `film` | `hdrfilm` | `width` (768), `height` (576): 1..=65536 each and at most 2^26 pixels; `pixel_format` (`rgb`, `rgba`); `component_format` and `file_format` accepted and ignored (output is float32 EXR); cropping is not supported; nested `rfilter`. |
-//! | `rfilter` | `box`, `gaussian`, `tent` | gaussian `stddev` (0.5, > 0); tent `radius` (1, > 0). Default: gaussian. |
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | `perspective` | `fov` | float | degrees | 0 < fov < 180 | from `focal_length` | field of view along `fov_axis` |
+//! | `perspective` | `focal_length` | string | mm | > 0, written `"50mm"` | `"50mm"` | 35 mm film equivalent, converted through the film diagonal to the x field of view, as Mitsuba does; not together with `fov` or `fov_axis` |
+//! | `perspective` | `fov_axis` | string | – | `x`, `y`, `smaller`, `larger` | `x` | the film axis `fov` applies to |
+//! | `perspective` | `near_clip`, `far_clip` | float | length | 0 < near_clip < far_clip | 0.01, 10000 | |
+//! | `perspective` | `to_world` | transform | – | rigid (rotation and translation) | identity | camera to world |
+//! | `perspective` | nested `medium` | – | – | at most one | none | the medium the camera sits in |
+//! | `independent` | `sample_count` | integer | – | 1 … 2³²−1 | 4 | samples per pixel |
+//! | `independent` | `seed` | integer | – | ≥ 0 | 0 | |
+//! | `hdrfilm` | `width`, `height` | integer | pixels | 1 … 65536, at most 2²⁶ pixels in all | 768, 576 | |
+//! | `hdrfilm` | `pixel_format` | string | – | `rgb`, `rgba` | `rgb` | the output is RGB either way |
+//! | `hdrfilm` | `component_format`, `file_format` | string | – | Mitsuba's | – | accepted and ignored: the output is float32 EXR; `crop_*` (cropping) is refused |
+//! | `gaussian` | `stddev` | float | pixels | 0 < stddev ≤ 64 | 0.5 | support 4 · stddev |
+//! | `tent` | `radius` | float | pixels | 0 < radius ≤ 256 | 1 | |
+//!
+//! ```xml
+//! <default name="res" value="256"/>
+//! <sensor type="perspective">
+//!     <float name="fov" value="40"/>
+//!     <transform name="to_world">
+//!         <lookat origin="0, 1, -6" target="0, 0, 0" up="0, 1, 0"/>
+//!     </transform>
+//!     <sampler type="independent"><integer name="sample_count" value="64"/></sampler>
+//!     <film type="hdrfilm">
+//!         <integer name="width" value="$res"/>
+//!         <integer name="height" value="$res"/>
+//!         <rfilter type="tent"/>
+//!     </film>
+//! </sensor>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! # spp and seed override sample_count and seed; res is the scene's <default>.
+//! img = fgf.render("scene.xml", spp=16, seed=1, defines={"res": 64})  # (64, 64, 3)
+//! ```
 
 use super::context::{check_object_attrs, plugin_type, to_mat4, Ctx};
 use super::document::XNode;

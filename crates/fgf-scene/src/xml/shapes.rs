@@ -1,8 +1,36 @@
-//! `<shape>`.
+//! `<shape>`: `cube` (`[-1, 1]³` in local space), `rectangle` (`[-1, 1]²`
+//! in the local xy plane, normal +z), `disk` (the unit disk in the local xy
+//! plane, normal +z), `sphere`, and the triangle meshes `obj` and `ply`
+//! (read by `mesh/`). A shape is a medium boundary when it names an
+//! `interior` or `exterior` medium (the exterior is on the normal's side).
 //!
-//! | element | types | parameters (default) |
-//! |---|---|---|
-//! | `shape` | `cube`, `rectangle`, `disk`, `sphere`, `obj`, `ply` | `to_world`, `flip_normals` (false); sphere `center` (0,0,0), `radius` (1, > 0); obj/ply `filename` (required), `face_normals` (false: a mesh without vertex normals gets Mitsuba's smooth, angle-weighted ones, see below; true: flat shading, the file's normals are ignored). Nested: one `bsdf` (default: diffuse 0.5, but diffuse 0 — black — on a shape with an `area` emitter, as in Mitsuba), one `area` emitter, media named `interior` / `exterior`. |
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | all | `to_world` | transform | – | invertible; a `sphere`'s: rotation, uniform scale and translation | identity | local to world |
+//! | all | `flip_normals` | boolean | – | – | false | turn the normals around |
+//! | `sphere` | `center` | point | length | – | (0, 0, 0) | in local space |
+//! | `sphere` | `radius` | float | length | > 0 | 1 | in local space |
+//! | `obj`, `ply` | `filename` | string | – | a file, relative to the scene file | required | OBJ (any groups, merged) or PLY (ascii or binary; n-gons fan-triangulated) |
+//! | `obj`, `ply` | `face_normals` | boolean | – | – | false | flat shading: the file's normals are ignored and none are computed (see below) |
+//! | all | nested `bsdf` | – | – | one, or a `<ref>` | diffuse 0.5; diffuse 0 on a shape with an area emitter | see below |
+//! | all | nested `emitter` | – | – | one `area` emitter | none | see [`super::emitters`] |
+//! | all | nested `medium` | – | – | `name="interior"` and/or `name="exterior"` | none | see [`super::media`] |
+//!
+//! ```xml
+//! <shape type="sphere">
+//!     <float name="radius" value="0.5"/>
+//!     <transform name="to_world"><translate y="0.5"/></transform>
+//!     <bsdf type="dielectric"/>
+//! </shape>
+//! <shape type="obj">
+//!     <string name="filename" value="meshes/octahedron.obj"/>
+//! </shape>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! img = fgf.render("scenes/spot-sphere.xml", spp=16)  # a sphere and a mesh
+//! ```
 //!
 //! # Two shape defaults that change images (as in Mitsuba 3.9)
 //!

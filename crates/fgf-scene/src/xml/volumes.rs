@@ -1,11 +1,34 @@
-//! Volumes: 3D textures that media take for `sigma_t`, `albedo` and `density`.
+//! `<volume>`: the 3D textures a medium takes for `sigma_t` and `albedo`
+//! (see [`super::media`]) and for the `density` of a non-exponential medium
+//! (see [`super::nonexp`]): `gridvolume`, a Mitsuba `.vol` grid file
+//! (float32; format in `fgf_io::vol`), and `constvolume`, a constant. The
+//! values are checked against the range of the parameter the volume is
+//! given for: `sigma_t` and `density` ≥ 0, `albedo` in [0, 1].
 //!
-//! Volumes: `<volume type="gridvolume" name="sigma_t">` with `filename` (a
-//! Mitsuba `.vol` file, 1 or 3 channels, relative to the scene file),
-//! `to_world`, `filter_type` (`trilinear` | `nearest`), `use_grid_bbox`
-//! (false: the grid spans `[0,1]^3` in volume space), `wrap_mode` (`clamp`
-//! only); or `<volume type="constvolume">` with `value` (float or rgb).
-//! `sigma_t` grids must be ≥ 0 and `albedo` grids in [0, 1].
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | `gridvolume` | `filename` | string | – | a `.vol` file of 1 or 3 channels (1 for `density`), relative to the scene file, at most 4 GiB | required | |
+//! | `gridvolume` | `to_world` | transform | – | invertible | identity | volume space to world |
+//! | `gridvolume` | `use_grid_bbox` | boolean | – | – | false | false: the grid spans the unit cube `[0, 1]³` of volume space; true: the bounding box in the file (which must not be empty) |
+//! | `gridvolume` | `filter_type` | string | – | `trilinear`, `nearest` | `trilinear` | interpolation between voxel centres |
+//! | `gridvolume` | `wrap_mode` | string | – | `clamp` | `clamp` | the other Mitsuba modes are not supported |
+//! | `constvolume` | `value` | float or rgb | that of the parameter | that of the parameter | 1 | |
+//!
+//! ```xml
+//! <volume type="gridvolume" name="sigma_t">
+//!     <string name="filename" value="density64.vol"/>
+//!     <string name="filter_type" value="nearest"/>
+//!     <transform name="to_world"><translate value="-0.5, 0, -0.5"/></transform>
+//! </volume>
+//! <volume type="constvolume" name="albedo"><rgb name="value" value="0.9, 0.8, 0.7"/></volume>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! field = fgf.synthesize((64, 64, 64), hurst=-0.1, seed=1)
+//! fgf.save_field("density.vol", field, mean=4.0, clamp_min=0.0)  # sigma_t >= 0
+//! img = fgf.render("scene.xml")  # a scene whose gridvolume reads density.vol
+//! ```
 
 use super::context::{check_object_attrs, rgb, to_invertible_mat4, Ctx};
 use super::document::XNode;
