@@ -844,7 +844,7 @@ fn heterogeneous_constvolume_albedo_and_hg_phase() {
     }
 }
 
-// --------------------------------------------------------- fgf media (issue 5)
+// ------------------------------------------------------------------ fgf media
 
 #[test]
 fn fgf_medium_parses_and_kfbm_length_defaults_to_bbox_diagonal() {

@@ -6,7 +6,7 @@
 //! Both plugins are usable wherever `homogeneous` is (shape `interior` /
 //! `exterior`, the sensor's medium). The extinction along a ray is a random
 //! field with mean `σ_m`; its ensemble-averaged transmittance `Tr(t)` is not
-//! exponential. The loader (`scene/xml/media.rs`) validates the parameters
+//! exponential. The loader (`fgf_scene::xml::nonexp`) validates the parameters
 //! and documents each in its parameter table; this is the summary.
 //!
 //! | parameter | plugin | units | range | default |
