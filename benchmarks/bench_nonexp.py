@@ -3,8 +3,7 @@ against the classical exponential one on the same scene.
 
     python benchmarks/bench_nonexp.py [--res 256] [--spp 64] [--threads N] [--repeat 2]
 
-Takes ``../shared/scenes/cube-homogeneous.xml`` (the folder beside the
-checkout) and swaps its medium (sigma_t 4, albedo 0.8) for:
+Takes ``scenes/reference/cube-homogeneous.xml`` and swaps its medium (sigma_t 4, albedo 0.8) for:
 
 * ``homogeneous`` (the exponential baseline),
 * ``nonexponential`` with ``transmittance="exponential"`` (the same
@@ -31,7 +30,7 @@ import tempfile
 import time
 from pathlib import Path
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "scenes"
+REFERENCE = Path(__file__).resolve().parents[1] / "scenes" / "reference"
 
 COMMON = '<float name="sigma_t" value="4.0"/><rgb name="albedo" value="0.8"/><phase type="isotropic"/>'
 MEDIA = {
@@ -62,7 +61,7 @@ def main() -> int:
 
     import fgf
 
-    src = (SHARED / "cube-homogeneous.xml").read_text()
+    src = (REFERENCE / "cube-homogeneous.xml").read_text()
     medium_re = re.compile(r'<medium type="homogeneous" name="interior">.*?</medium>', re.S)
     if len(medium_re.findall(src)) != 1:
         print("bench_nonexp: cannot find the cube's medium in cube-homogeneous.xml", file=sys.stderr)

@@ -2,11 +2,11 @@
 
     python benchmarks/bench_render.py [--res 256] [--spp 64] [--max-depth 64] [--threads N] [--repeat 3]
 
-Renders ``../shared/scenes/cube-homogeneous.xml`` and
-``cube-heterogeneous.xml`` (the folder beside the checkout) with fgf, with
-Mitsuba ``scalar_rgb`` and, if Debian's ``libllvm19`` is installed, Mitsuba
-``llvm_ad_rgb`` (``apt-get install -y libllvm19``; the script sets
-``DRJIT_LIBLLVM_PATH`` itself). Each Mitsuba variant runs in its own
+Renders ``scenes/reference/cube-homogeneous.xml`` and
+``cube-heterogeneous.xml`` with fgf, with Mitsuba ``scalar_rgb`` and, if
+Debian's ``libllvm19`` is installed, Mitsuba ``llvm_ad_rgb``
+(``apt-get install -y libllvm19``; the script sets ``DRJIT_LIBLLVM_PATH``
+itself). Each Mitsuba variant runs in its own
 subprocess. Every renderer is treated alike: one untimed warm-up render with
 the same settings (for ``llvm_ad_rgb`` it compiles the kernel; for fgf it
 starts the thread pool), then ``--repeat`` timed renders of which the fastest
@@ -30,7 +30,7 @@ from pathlib import Path
 # benchmark does no linear algebra.
 os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
 
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "scenes"
+REFERENCE = Path(__file__).resolve().parents[1] / "scenes" / "reference"
 SCENES = ["cube-homogeneous.xml", "cube-heterogeneous.xml"]
 LLVM19 = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 
@@ -114,7 +114,7 @@ def main() -> int:
     print("robust to other jobs on the machine; ratios are fgf over the other renderer.")
     print(f"{'scene':<26} {'renderer':<22} {'seconds':>8} {'M/s wall':>9} {'ratio':>6} {'M/s cpu':>8} {'ratio':>6}")
     for name in SCENES:
-        scene = SHARED / name
+        scene = REFERENCE / name
         defines = {"res": args.res, "spp": args.spp, "max_depth": args.max_depth}
         r = best_of(
             lambda seed: fgf.render(scene, seed=seed, threads=args.threads, defines=defines, progress=False),

@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "scenes"
+REFERENCE = Path(__file__).resolve().parents[1] / "scenes" / "reference"
 
 
 def fgf_cli(*args, **kw):
@@ -22,7 +22,7 @@ def fgf_cli(*args, **kw):
 def test_render_writes_exr_png_and_variance(tmp_path):
     out = tmp_path / "img.exr"
     r = fgf_cli(
-        "render", SHARED / "cube-homogeneous.xml", "-o", out, "--spp", 2, "-D", "res=16", "--variance", tmp_path / "var.exr"
+        "render", REFERENCE / "cube-homogeneous.xml", "-o", out, "--spp", 2, "-D", "res=16", "--variance", tmp_path / "var.exr"
     )
     assert r.returncode == 0, r.stderr
     assert out.exists() and (tmp_path / "img.png").exists() and (tmp_path / "var.exr").exists()
@@ -31,7 +31,7 @@ def test_render_writes_exr_png_and_variance(tmp_path):
 
 def test_render_quiet_and_png_path(tmp_path):
     r = fgf_cli(
-        "render", SHARED / "cube-homogeneous.xml", "-o", tmp_path / "a.exr", "--png", tmp_path / "p.png",
+        "render", REFERENCE / "cube-homogeneous.xml", "-o", tmp_path / "a.exr", "--png", tmp_path / "p.png",
         "--spp", 1, "-D", "res=8", "--quiet",
     )
     assert r.returncode == 0 and r.stderr == ""
@@ -48,14 +48,14 @@ def test_bad_scene_exits_2_with_message_and_no_traceback(tmp_path):
     assert not (tmp_path / "o.exr").exists()
     r = fgf_cli("render", tmp_path / "missing.xml", "-o", tmp_path / "o.exr")
     assert r.returncode == 2 and "Traceback" not in r.stderr
-    r = fgf_cli("render", SHARED / "cube-homogeneous.xml", "-o", tmp_path / "o.exr", "-D", "novalue")
+    r = fgf_cli("render", REFERENCE / "cube-homogeneous.xml", "-o", tmp_path / "o.exr", "-D", "novalue")
     assert r.returncode == 2 and "name=value" in r.stderr
 
 
 def test_ctrl_c_writes_partial_image(tmp_path):
     out = tmp_path / "partial.exr"
     p = subprocess.Popen(
-        [sys.executable, "-m", "fgf", "render", str(SHARED / "cube-heterogeneous.xml"), "-o", str(out),
+        [sys.executable, "-m", "fgf", "render", str(REFERENCE / "cube-heterogeneous.xml"), "-o", str(out),
          "--spp", "100000", "-D", "res=32", "--quiet"],
         stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
     )

@@ -11,8 +11,8 @@ import pytest
 import fgf
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "scenes"
-SCENE = SHARED / "cube-heterogeneous.xml"
+REFERENCE = Path(__file__).resolve().parents[1] / "scenes" / "reference"
+SCENE = REFERENCE / "cube-heterogeneous.xml"
 SMALL = {"res": 16}
 
 

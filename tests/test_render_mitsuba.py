@@ -32,7 +32,7 @@ from scipy import stats
 import fgf
 
 REPO = Path(__file__).resolve().parents[1]
-SHARED = Path(__file__).resolve().parents[2] / "shared" / "scenes"
+REFERENCE = Path(__file__).resolve().parents[1] / "scenes" / "reference"
 K = 16
 BLOCK = 8
 ALPHA_BLOCKS = 0.01
@@ -126,8 +126,8 @@ SMALL = {"res": 32}
 @pytest.mark.parametrize(
     "scene, spp, defines",
     [
-        (SHARED / "cube-homogeneous.xml", 32, SMALL),
-        (SHARED / "cube-heterogeneous.xml", 32, SMALL),
+        (REFERENCE / "cube-homogeneous.xml", 32, SMALL),
+        (REFERENCE / "cube-heterogeneous.xml", 32, SMALL),
         (REPO / "scenes" / "glass-medium.xml", 32, SMALL),
         (REPO / "scenes" / "spot-sphere.xml", 32, SMALL),
     ],
@@ -141,8 +141,8 @@ def test_matches_mitsuba(scene, spp, defines):
 @pytest.mark.parametrize(
     "scene, spp, defines",
     [
-        (SHARED / "cube-homogeneous.xml", 64, {"res": 64}),
-        (SHARED / "cube-heterogeneous.xml", 64, {"res": 64}),
+        (REFERENCE / "cube-homogeneous.xml", 64, {"res": 64}),
+        (REFERENCE / "cube-heterogeneous.xml", 64, {"res": 64}),
         (REPO / "scenes" / "glass-medium.xml", 64, {"res": 64}),
         (REPO / "scenes" / "spot-sphere.xml", 64, {"res": 64}),
         # Mitsuba's default reconstruction filters (fgf samples them by filter
@@ -150,7 +150,7 @@ def test_matches_mitsuba(scene, spp, defines):
         (REPO / "scenes" / "spot-sphere.xml", 32, {"res": 32, "filter": "gaussian"}),
         (REPO / "scenes" / "glass-medium.xml", 32, {"res": 32, "filter": "tent"}),
         # max_depth semantics: 1 = emitters seen directly, 2 = single scattering.
-        (SHARED / "cube-homogeneous.xml", 32, {"res": 32, "max_depth": 2}),
+        (REFERENCE / "cube-homogeneous.xml", 32, {"res": 32, "max_depth": 2}),
         (REPO / "scenes" / "spot-sphere.xml", 32, {"res": 32, "max_depth": 1}),
         (REPO / "scenes" / "glass-medium.xml", 32, {"res": 32, "max_depth": 3}),
     ],

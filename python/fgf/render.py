@@ -6,9 +6,12 @@
 ((256, 256, 3), dtype('float32'))
 >>> fgf.write_exr("out.exr", img); fgf.write_png("out.png", img) # doctest: +SKIP
 
-The supported XML subset, the plugins and their parameters are documented
-in the Rust crate ``fgf-render`` (``scene/xml.rs`` and one table per plugin
-family). Images are linear RGB, row 0 at the top.
+The supported XML subset and its units are documented in the Rust crate
+``fgf-scene`` (``crates/fgf-scene/src/xml/mod.rs``), and each plugin
+family's parameters (units, range, default) in the table at the head of its
+file there: ``integrators.rs``, ``sensors.rs``, ``shapes.rs``, ``bsdfs.rs``,
+``emitters.rs``, ``media.rs``, ``nonexp.rs``, ``volumes.rs``, ``phase.rs``.
+Images are linear RGB, row 0 at the top.
 """
 
 from __future__ import annotations

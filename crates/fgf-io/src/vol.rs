@@ -229,9 +229,9 @@ mod tests {
     }
 
     #[test]
-    fn shared_example_grid_reads() {
-        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../../shared/scenes/density64.vol");
-        let g = read_vol(&p).expect("../shared/scenes/density64.vol must sit beside the checkout");
+    fn reference_example_grid_reads() {
+        let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../scenes/reference/density64.vol");
+        let g = read_vol(&p).expect("scenes/reference/density64.vol is part of the repository");
         assert_eq!(g.shape, [64, 64, 64]);
         let mean: f64 = g.data.iter().map(|&v| v as f64).sum::<f64>() / g.data.len() as f64;
         assert!((mean - 1.0).abs() < 1e-3, "mean {mean}");

@@ -3,14 +3,14 @@
 
 use crate::errors::{io_err, ParameterError, SceneError};
 use crate::progress::run_job;
-use fgf_render::scene::SceneErrorKind;
 use fgf_render::{RenderError, RenderOptions};
+use fgf_scene::SceneErrorKind;
 use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
 
-pub(crate) fn scene_err(e: fgf_render::scene::SceneError) -> PyErr {
+pub(crate) fn scene_err(e: fgf_scene::SceneError) -> PyErr {
     match e.kind {
         SceneErrorKind::Io => PyOSError::new_err(e.to_string()),
         _ => SceneError::new_err(e.to_string()),
@@ -19,6 +19,7 @@ pub(crate) fn scene_err(e: fgf_render::scene::SceneError) -> PyErr {
 
 pub(crate) fn render_err(e: RenderError, source: &str) -> PyErr {
     match e {
+        RenderError::Scene(e) => scene_err(e),
         RenderError::InvalidOption(_) | RenderError::Field { .. } => {
             ParameterError::new_err(e.to_string())
         }
@@ -56,9 +57,9 @@ pub(crate) fn load_scene(
     py: Python<'_>,
     scene: &std::path::Path,
     defines: Option<Vec<(String, String)>>,
-) -> PyResult<fgf_render::scene::SceneDesc> {
+) -> PyResult<fgf_scene::SceneDesc> {
     let defines = defines.unwrap_or_default();
-    py.detach(|| fgf_render::scene::load_file(scene, &defines))
+    py.detach(|| fgf_scene::load_file(scene, &defines))
         .map_err(scene_err)
 }
 

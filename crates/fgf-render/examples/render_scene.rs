@@ -23,7 +23,7 @@ fn main() -> ExitCode {
         eprintln!("{usage}");
         return ExitCode::from(2);
     };
-    let scene = match fgf_render::scene::xml::load_file(path.as_ref(), &[]) {
+    let scene = match fgf_scene::load_file(path.as_ref(), &[]) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");

@@ -19,8 +19,8 @@
 //! ```
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
-use crate::scene::desc::BsdfDesc;
 use crate::spectrum::Spectrum;
+use fgf_scene::BsdfDesc;
 use glam::Vec3;
 use std::f32::consts::FRAC_1_PI;
 

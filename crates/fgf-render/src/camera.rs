@@ -6,7 +6,7 @@
 
 use crate::error::RenderError;
 use crate::ray::Ray;
-use crate::scene::desc::{FovAxis, SensorDesc};
+use fgf_scene::{FovAxis, SensorDesc};
 use glam::{Affine3A, Vec3};
 
 #[derive(Debug, Clone)]
@@ -91,7 +91,7 @@ impl Camera {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::desc::FilterDesc;
+    use fgf_scene::FilterDesc;
     use glam::Mat4;
 
     fn sensor(fov_axis: FovAxis, w: u32, h: u32) -> SensorDesc {

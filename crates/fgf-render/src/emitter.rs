@@ -19,8 +19,8 @@
 
 use crate::geometry::Geometry;
 use crate::math::{sample_uniform_sphere, UNIFORM_SPHERE_PDF};
-use crate::scene::desc::EmitterDesc;
 use crate::spectrum::{from_rgb, Spectrum};
+use fgf_scene::EmitterDesc;
 use glam::{Mat3, Vec3};
 
 #[derive(Debug, Clone, Copy)]

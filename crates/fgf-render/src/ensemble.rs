@@ -49,7 +49,7 @@
 //!
 //! ```no_run
 //! use fgf_render::ensemble::{ensemble, EnsembleOptions};
-//! let scene = fgf_render::scene::xml::load_file("scenes/fgf-cube-pink.xml".as_ref(), &[]).unwrap();
+//! let scene = fgf_scene::load_file("scenes/fgf-cube-pink.xml".as_ref(), &[]).unwrap();
 //! let opts = EnsembleOptions { realizations: 16, ..Default::default() };
 //! let out = ensemble(&scene, &opts, &fgf_core::NoProgress).unwrap();
 //! println!("{:?}", out.media[0]);
@@ -58,13 +58,13 @@
 use crate::error::RenderError;
 use crate::medium::grid::GridTex;
 use crate::render::{render, RenderOptions};
-use crate::scene::desc::{
-    GridFilter, GridVolumeDesc, MediumDesc, Rgb, SceneDesc, TransmittanceDesc, VolumeDesc,
-};
 use fgf_core::rng::{mix64, stream_key};
 use fgf_core::transmittance::Fgf;
 use fgf_core::Progress;
 use fgf_field::{sw_3d_for_ray_statistics, synthesize, Anchor, FieldError, Precision, SynthParams};
+use fgf_scene::{
+    GridFilter, GridVolumeDesc, MediumDesc, Rgb, SceneDesc, TransmittanceDesc, VolumeDesc,
+};
 use glam::{DVec3, Mat4};
 use std::sync::Arc;
 
@@ -211,7 +211,7 @@ fn plan(scene: &SceneDesc, opts: &EnsembleOptions) -> Result<Vec<Plan>, RenderEr
         let mut lo = DVec3::splat(f64::INFINITY);
         let mut hi = DVec3::splat(f64::NEG_INFINITY);
         for s in scene.shapes.iter().filter(|s| s.interior == Some(i)) {
-            let (a, b) = crate::scene::xml::plugins::shape_bbox(s);
+            let (a, b) = s.world_bbox();
             lo = lo.min(a);
             hi = hi.max(b);
         }
@@ -283,6 +283,7 @@ pub fn ensemble(
     opts: &EnsembleOptions,
     progress: &dyn Progress,
 ) -> Result<EnsembleOutput, EnsembleError> {
+    scene.validate().map_err(RenderError::from)?;
     if opts.realizations == 0 {
         return Err(RenderError::InvalidOption(
             "realizations = 0; need at least 1 (2 for a standard error)".into(),

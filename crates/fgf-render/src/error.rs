@@ -17,7 +17,10 @@ use fgf_field::FieldError;
 /// options, and cancellation.
 #[derive(Debug, thiserror::Error)]
 pub enum RenderError {
-    /// The scene description is invalid.
+    /// The description breaks a rule of [`fgf_scene::SceneDesc::validate`].
+    #[error(transparent)]
+    Scene(#[from] fgf_scene::SceneError),
+    /// The scene description is invalid in a way only compiling it shows.
     #[error("invalid scene: {0}")]
     InvalidScene(String),
     /// A parameter of medium `medium` that its `fgf-core` model rejects.

@@ -22,8 +22,8 @@
 //! [`RenderOutput`] takes the pixel means and, if asked, their variances.
 
 use crate::math::Sampler;
-use crate::scene::desc::FilterDesc;
 use crate::spectrum::Spectrum;
+use fgf_scene::FilterDesc;
 
 const GAUSS_BINS: usize = 1024;
 

@@ -4,10 +4,10 @@
 //! format, with classical (homogeneous, grid) and non-exponential (FGF,
 //! Bitterli 2018) media.
 //!
-//! * [`scene::desc`]: the plain-data scene description. The XML loader
-//!   produces it; the renderer consumes it. It is the only contract between
-//!   the two halves.
-//! * [`scene::xml`]: the Mitsuba 3 XML loader.
+//! The renderer consumes a [`fgf_scene::SceneDesc`], the plain-data scene
+//! description of the `fgf-scene` crate (which also holds its validator and
+//! the XML loader): that description is the only contract between the two.
+//!
 //! * [`render`](mod@render): the renderer's entry point, from a `SceneDesc` to
 //!   pixels ([`film`] holds the image it returns), [`error`] its error;
 //!   [`world`] (the scene compiled for rendering), [`integrator`]
@@ -20,8 +20,6 @@
 // `!(x > 0.0)` is used on purpose: it is true for NaN, which must take the
 // degenerate branch (as in fgf-core); `partial_cmp` would only obscure that.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
-
-pub mod scene;
 
 pub mod bsdf;
 pub mod camera;

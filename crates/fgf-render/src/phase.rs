@@ -13,7 +13,7 @@
 //! ```
 
 use crate::math::{sample_uniform_sphere, Frame, UNIFORM_SPHERE_PDF};
-use crate::scene::desc::PhaseDesc;
+use fgf_scene::PhaseDesc;
 use glam::Vec3;
 use std::f32::consts::PI;
 

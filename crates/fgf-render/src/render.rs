@@ -13,7 +13,7 @@
 //!
 //! ```no_run
 //! use fgf_render::render::{render, RenderOptions};
-//! let scene = fgf_render::scene::xml::load_file("scene.xml".as_ref(), &[]).unwrap();
+//! let scene = fgf_scene::load_file("scene.xml".as_ref(), &[]).unwrap();
 //! let out = render(&scene, &RenderOptions::default(), &fgf_core::NoProgress).unwrap();
 //! fgf_io::image::write_exr("out.exr".as_ref(), out.width, out.height, 3, &out.image).unwrap();
 //! ```
@@ -21,9 +21,9 @@
 use crate::error::RenderError;
 use crate::film::{Accum, Filter, RenderOutput};
 use crate::math::Sampler;
-use crate::scene::desc::SceneDesc;
 use crate::world::World;
 use fgf_core::Progress;
+use fgf_scene::SceneDesc;
 use rayon::prelude::*;
 
 /// Overrides of the scene's sampler settings.

@@ -2,7 +2,7 @@
 //! throughput and per-channel coefficients (σ_t, albedo), with the one
 //! conversion from the scene description's [`Rgb`].
 
-use crate::scene::desc::Rgb;
+use fgf_scene::Rgb;
 use glam::Vec3;
 
 /// Linear RGB radiance/throughput; component-wise arithmetic.

@@ -8,7 +8,7 @@ use crate::emitter::Emitter;
 use crate::error::RenderError;
 use crate::geometry::Geometry;
 use crate::medium::Medium;
-use crate::scene::desc::{EmitterDesc, IntegratorKind, SceneDesc};
+use fgf_scene::SceneDesc;
 use glam::Vec3;
 
 /// Per-shape data the integrator needs at a hit.
@@ -58,66 +58,11 @@ pub struct World {
     pub(crate) any_null: bool,
 }
 
-/// The checks of a scene description's structure that compiling it relies
-/// on: the integrator can handle the scene's media, every index refers to
-/// an existing BSDF or medium, area emitters sit on shapes and there is at
-/// most one environment emitter.
-///
-/// **To be replaced by the scene crate's single validator**
-/// (`SceneDesc::validate`), which also covers these; until then this is
-/// where the renderer checks them, all in one place. (Checks that need
-/// compiled data, such as a shape's area, stay in [`World::build`]; the
-/// range checks of the camera, the shapes and the media stay in their
-/// constructors.)
-fn validate_structure(desc: &SceneDesc) -> Result<(), RenderError> {
-    if desc.integrator.kind == IntegratorKind::Path
-        && (!desc.media.is_empty() || desc.sensor.medium.is_some())
-    {
-        return Err(RenderError::InvalidScene(
-            "the 'path' integrator does not handle media; use 'volpath'".into(),
-        ));
-    }
-    let n_media = desc.media.len();
-    let check_medium = |m: Option<usize>, what: &str| match m {
-        Some(i) if i >= n_media => Err(RenderError::InvalidScene(format!(
-            "{what} refers to medium {i}, but there are {n_media}"
-        ))),
-        _ => Ok(()),
-    };
-    for s in &desc.shapes {
-        if s.bsdf >= desc.bsdfs.len() {
-            return Err(RenderError::InvalidScene(format!(
-                "{}: BSDF index {} out of range",
-                s.name, s.bsdf
-            )));
-        }
-        check_medium(s.interior, &s.name)?;
-        check_medium(s.exterior, &s.name)?;
-    }
-    let mut n_env = 0;
-    for e in &desc.emitters {
-        match e {
-            EmitterDesc::Area { .. } => {
-                return Err(RenderError::InvalidScene(
-                    "an area emitter must be attached to a shape".into(),
-                ))
-            }
-            EmitterDesc::Constant { .. } => n_env += 1,
-            _ => {}
-        }
-        if n_env > 1 {
-            return Err(RenderError::InvalidScene(
-                "more than one constant environment emitter".into(),
-            ));
-        }
-    }
-    check_medium(desc.sensor.medium, "the sensor")
-}
-
 impl World {
-    /// Compile `desc` (checked first by `validate_structure`).
+    /// Compile `desc`, which is checked first by [`SceneDesc::validate`]
+    /// (scenes built in code pass through the same rules as loaded ones).
     pub fn build(desc: &SceneDesc) -> Result<World, RenderError> {
-        validate_structure(desc)?;
+        desc.validate()?;
         let geom = Geometry::build(&desc.shapes)?;
         let bsdfs: Vec<Bsdf> = desc.bsdfs.iter().map(Bsdf::from_desc).collect();
         let media = desc

@@ -6,8 +6,8 @@ mod common;
 
 use common::{cube_on_ground, medium_xml, WHITE_SKY};
 use fgf_render::ensemble::{ensemble, EnsembleError, EnsembleOptions};
-use fgf_render::scene::desc::SceneDesc;
 use fgf_render::{render, RenderError, RenderOptions};
+use fgf_scene::SceneDesc;
 
 /// The reference cube (scaled by `scale`) holding `medium`, under a white
 /// sky, on a 16² film with 8 samples per pixel.

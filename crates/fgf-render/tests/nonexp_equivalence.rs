@@ -11,8 +11,8 @@ mod common;
 
 use common::{cube_on_ground, medium_xml, SIDE_LIGHT};
 use fgf_core::transmittance::Fgf;
-use fgf_render::scene::desc::SceneDesc;
 use fgf_render::{render, RenderOptions, RenderOutput};
+use fgf_scene::SceneDesc;
 
 /// The reference cube scene in small (a 24² film, 16 samples per pixel).
 fn scene(medium: &str) -> SceneDesc {

@@ -24,9 +24,9 @@ use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Tr
 use fgf_render::math::{sample_uniform_sphere, Sampler};
 use fgf_render::medium::{DistanceEvent, Medium, SegmentEnd, SegmentStart};
 use fgf_render::ray::Ray;
-use fgf_render::scene::desc::{MediumDesc, SceneDesc};
 use fgf_render::spectrum::Spectrum;
 use fgf_render::world::World;
+use fgf_scene::{MediumDesc, SceneDesc};
 use glam::Vec3;
 
 const Z: f64 = 4.5;
@@ -107,7 +107,7 @@ fn estimate(
 
 /// The model a scene medium uses in channel `c` (for analytic targets).
 fn model_of(d: &MediumDesc, c: usize) -> Model {
-    use fgf_render::scene::desc::TransmittanceDesc as T;
+    use fgf_scene::TransmittanceDesc as T;
     let MediumDesc::NonExponential { sigma_t, model, .. } = d else {
         panic!("not non-exponential")
     };
@@ -549,9 +549,7 @@ fn camera_inside_a_medium_renders_the_furnace() {
                 <shape type="sphere"><float name="radius" value="2"/><bsdf type="null"/><ref name="interior" id="m"/></shape>
                 </scene>"#
             );
-            let sc =
-                fgf_render::scene::xml::load_str(&xml, "t.xml", std::path::Path::new("."), &[])
-                    .unwrap();
+            let sc = fgf_scene::load_str(&xml, "t.xml", std::path::Path::new("."), &[]).unwrap();
             let opts = fgf_render::RenderOptions {
                 seed: Some(3),
                 variance: true,

@@ -8,7 +8,7 @@ use super::types::{
 };
 use super::Geometry;
 use crate::error::RenderError;
-use crate::scene::desc::{GeometryDesc, ShapeDesc};
+use fgf_scene::{GeometryDesc, ShapeDesc};
 use glam::{Affine3A, Mat3, Mat4, Vec3};
 use std::f32::consts::PI;
 

@@ -4,8 +4,8 @@ use super::query::{disk_root, sphere_roots};
 use super::types::Tri;
 use super::*;
 use crate::ray::Ray;
-use crate::scene::desc::TriangleMesh;
-use crate::scene::desc::{GeometryDesc, ShapeDesc};
+use fgf_scene::TriangleMesh;
+use fgf_scene::{GeometryDesc, ShapeDesc};
 use glam::{Mat4, Vec3, Vec3A};
 use std::sync::Arc;
 

@@ -34,8 +34,8 @@ use crate::error::RenderError;
 use crate::math::Sampler;
 use crate::phase::Phase;
 use crate::ray::Ray;
-use crate::scene::desc::{GridFilter, GridVolumeDesc, VolumeDesc};
 use crate::spectrum::{mean, Spectrum};
+use fgf_scene::{GridFilter, GridVolumeDesc, VolumeDesc};
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 
@@ -53,28 +53,6 @@ pub struct GridTex {
 impl GridTex {
     pub fn new(d: &GridVolumeDesc, what: &str) -> Result<GridTex, RenderError> {
         let g = &d.grid;
-        if !(g.channels == 1 || g.channels == 3) {
-            return Err(RenderError::Unsupported(format!(
-                "{what}: a gridvolume with {} channels; 1 or 3 are supported",
-                g.channels
-            )));
-        }
-        if g.shape.contains(&0) || g.data.len() != g.shape.iter().product::<usize>() * g.channels {
-            return Err(RenderError::InvalidScene(format!(
-                "{what}: grid data does not match its {:?} shape",
-                g.shape
-            )));
-        }
-        if let Some(v) = g.data.iter().find(|v| !v.is_finite() || **v < 0.0) {
-            return Err(RenderError::InvalidScene(format!(
-                "{what}: grid holds {v}; values must be finite and >= 0"
-            )));
-        }
-        if !d.wrap_clamp {
-            return Err(RenderError::Unsupported(format!(
-                "{what}: only wrap_mode=clamp is supported"
-            )));
-        }
         let m = glam::Mat4::from(Affine3A::from_mat4(d.to_world));
         if m.determinant().abs() < 1e-30 || !m.is_finite() {
             return Err(RenderError::InvalidScene(format!(
@@ -86,11 +64,6 @@ impl GridTex {
             let b = g.bbox;
             let lo = Vec3::new(b[0], b[1], b[2]);
             let ext = Vec3::new(b[3], b[4], b[5]) - lo;
-            if !(ext.min_element() > 0.0) {
-                return Err(RenderError::InvalidScene(format!(
-                    "{what}: use_grid_bbox with an empty bounding box {b:?}"
-                )));
-            }
             to_unit = Affine3A::from_scale(ext.recip()) * Affine3A::from_translation(-lo) * to_unit;
         }
         Ok(GridTex {
@@ -259,11 +232,6 @@ impl GridMedium {
         index: usize,
     ) -> Result<GridMedium, RenderError> {
         let what = format!("medium {index} sigma_t");
-        if !(scale.is_finite() && scale >= 0.0) {
-            return Err(RenderError::InvalidScene(format!(
-                "medium {index}: scale = {scale}; must be finite and >= 0"
-            )));
-        }
         let tex = GridTex::new(sigma_t, &what)?;
         let albedo = match albedo {
             VolumeDesc::Constant(a) => Albedo::Constant(crate::spectrum::from_rgb(*a)),

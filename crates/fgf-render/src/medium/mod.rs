@@ -57,8 +57,8 @@ use crate::error::RenderError;
 use crate::math::Sampler;
 use crate::phase::Phase;
 use crate::ray::Ray;
-use crate::scene::desc::{MediumDesc, VolumeDesc};
 use crate::spectrum::{from_rgb, Spectrum};
+use fgf_scene::{MediumDesc, VolumeDesc};
 
 /// How the current free-flight segment started (`theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

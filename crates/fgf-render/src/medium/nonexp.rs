@@ -6,7 +6,7 @@
 //! Both plugins are usable wherever `homogeneous` is (shape `interior` /
 //! `exterior`, the sensor's medium). The extinction along a ray is a random
 //! field with mean `σ_m`; its ensemble-averaged transmittance `Tr(t)` is not
-//! exponential. The loader (`scene/xml/media.rs`) validates the parameters
+//! exponential. The loader (`fgf_scene::xml::nonexp`) validates the parameters
 //! and documents each in its parameter table; this is the summary.
 //!
 //! | parameter | plugin | units | range | default |
@@ -105,9 +105,9 @@ use crate::math::Sampler;
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
 use crate::ray::Ray;
-use crate::scene::desc::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use crate::spectrum::Spectrum;
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
+use fgf_scene::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
 use glam::{DVec3, Vec3};
 use std::ops::ControlFlow;
 
@@ -147,11 +147,6 @@ impl NonExp {
         let mut models = [None; 3];
         for c in 0..3 {
             let s = sigma_t[c] as f64;
-            if !(s.is_finite() && s >= 0.0) {
-                return Err(RenderError::InvalidScene(format!(
-                    "medium {index}: sigma_t channel {c} = {s}; must be finite and >= 0"
-                )));
-            }
             if s == 0.0 {
                 continue;
             }
@@ -169,11 +164,6 @@ impl NonExp {
                 medium: index,
                 source,
             })?);
-        }
-        if let Some(a) = albedo.iter().find(|a| !(0.0..=1.0).contains(*a)) {
-            return Err(RenderError::InvalidScene(format!(
-                "medium {index}: albedo {a}; must lie in [0, 1]"
-            )));
         }
         let grey = models[0] == models[1] && models[1] == models[2];
         let tables_of = |m: &Option<Model>| {
@@ -443,12 +433,6 @@ impl Density {
     fn new(g: &GridVolumeDesc, index: usize) -> Result<Density, RenderError> {
         let what = format!("medium {index} density");
         let tex = GridTex::new(g, &what)?;
-        if g.grid.channels != 1 {
-            return Err(RenderError::Unsupported(format!(
-                "{what}: a density grid must have 1 channel (it has {})",
-                g.grid.channels
-            )));
-        }
         let offset = match tex.filter() {
             GridFilter::Trilinear => 0.5,
             GridFilter::Nearest => 0.0,

@@ -3,24 +3,24 @@
 //! Monte Carlo estimate. Each test file uses a subset.
 #![allow(dead_code)]
 
-use fgf_render::scene::desc::SceneDesc;
+use fgf_scene::SceneDesc;
 
 /// A scene from its XML text (relative paths against the working directory).
 pub fn load_xml(xml: &str) -> SceneDesc {
-    fgf_render::scene::xml::load_str(xml, "test.xml", std::path::Path::new("."), &[])
+    fgf_scene::load_str(xml, "test.xml", std::path::Path::new("."), &[])
         .unwrap_or_else(|e| panic!("{e}\n{xml}"))
 }
 
 /// A reference scene with its `res` and `spp` defaults overridden.
 pub fn reference_scene(name: &str, res: u32, spp: u32) -> SceneDesc {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("../../../shared/scenes")
+        .join("../../scenes/reference")
         .join(name);
     let defines = [
         ("res".to_string(), res.to_string()),
         ("spp".to_string(), spp.to_string()),
     ];
-    fgf_render::scene::load_file(&path, &defines).unwrap_or_else(|e| panic!("{e}"))
+    fgf_scene::load_file(&path, &defines).unwrap_or_else(|e| panic!("{e}"))
 }
 
 /// The small side light of the reference cube scenes (an area emitter of

@@ -8,24 +8,14 @@
 //! The fast test runs 3000 mutants (well under a second of loading in
 //! release mode); the `#[ignore]`d one runs 60000 for the slow step.
 
-use fgf_render::scene::*;
+mod common;
+
+use common::reference_dir;
+use fgf_scene::*;
 use rand::{Rng, SeedableRng};
 use rand_pcg::Pcg64;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::PathBuf;
-
-fn scenes_dir() -> PathBuf {
-    let p = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes"
-    ));
-    assert!(
-        p.join("cube-homogeneous.xml").exists() && p.join("cube-heterogeneous.xml").exists(),
-        "reference scenes missing in {}",
-        p.display()
-    );
-    p
-}
 
 const WEIRD_NUMBERS: &[&str] = &[
     "NaN",
@@ -204,7 +194,7 @@ fn check_invariants(d: &SceneDesc) {
 }
 
 fn run(count: usize, seed: u64) {
-    let dir = scenes_dir();
+    let dir = reference_dir();
     let sources: Vec<(PathBuf, String)> = ["cube-homogeneous.xml", "cube-heterogeneous.xml"]
         .iter()
         .map(|n| {

@@ -3,27 +3,12 @@
 //! default values) and one test per class of malformed input, each asserting
 //! the message names the file, the line and the parameter.
 
-use fgf_render::scene::*;
+mod common;
+
+use common::{data_dir, has, meshes_dir, reference_scene};
+use fgf_scene::*;
 use glam::{Mat4, Vec3, Vec4};
-use std::path::{Path, PathBuf};
-
-fn shared_scene(name: &str) -> PathBuf {
-    let p = PathBuf::from(concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../../shared/scenes"
-    ))
-    .join(name);
-    assert!(
-        p.exists(),
-        "reference scene {} is missing: the tests need ../shared/scenes beside the repository",
-        p.display()
-    );
-    p
-}
-
-fn data_dir() -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data"))
-}
+use std::path::Path;
 
 /// Wrap `body` in a `<scene>` whose first body line is line 2.
 fn wrap(body: &str) -> String {
@@ -43,13 +28,6 @@ fn err(body: &str) -> String {
     match load(body) {
         Ok(_) => panic!("expected an error for:\n{body}"),
         Err(e) => e.to_string(),
-    }
-}
-
-/// Assert `msg` contains every one of `parts`.
-fn has(msg: &str, parts: &[&str]) {
-    for p in parts {
-        assert!(msg.contains(p), "message lacks {p:?}:\n{msg}");
     }
 }
 
@@ -189,7 +167,7 @@ fn check_reference_common(s: &SceneDesc) {
 
 #[test]
 fn reference_homogeneous_scene_loads_with_mitsubas_values() {
-    let s = load_file(&shared_scene("cube-homogeneous.xml"), &[]).unwrap();
+    let s = load_file(&reference_scene("cube-homogeneous.xml"), &[]).unwrap();
     check_reference_common(&s);
     match &s.media[0] {
         MediumDesc::Homogeneous {
@@ -207,7 +185,7 @@ fn reference_homogeneous_scene_loads_with_mitsubas_values() {
 
 #[test]
 fn reference_heterogeneous_scene_loads_its_grid() {
-    let s = load_file(&shared_scene("cube-heterogeneous.xml"), &[]).unwrap();
+    let s = load_file(&reference_scene("cube-heterogeneous.xml"), &[]).unwrap();
     check_reference_common(&s);
     match &s.media[0] {
         MediumDesc::Heterogeneous {
@@ -251,7 +229,7 @@ fn defines_override_defaults() {
         ("spp".to_string(), "7".to_string()),
         ("res".to_string(), "32".to_string()),
     ];
-    let s = load_file(&shared_scene("cube-homogeneous.xml"), &d).unwrap();
+    let s = load_file(&reference_scene("cube-homogeneous.xml"), &d).unwrap();
     assert_eq!((s.sensor.spp, s.sensor.width, s.sensor.height), (7, 32, 32));
     assert_eq!(s.integrator.max_depth, 64);
 }
@@ -619,10 +597,6 @@ fn check_normals(s: &ShapeDesc, expected: &[([f32; 3], Vec3)], tol: f32) {
     }
 }
 
-fn meshes_dir() -> PathBuf {
-    PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../scenes/meshes"))
-}
-
 /// Tolerance for unit normals computed in float32 (ours and Mitsuba's):
 /// a few hundred ulps of 1 (6e-8) covers the differently ordered crosses,
 /// square roots and asin of the two implementations; a wrong weighting or
@@ -870,7 +844,7 @@ fn heterogeneous_constvolume_albedo_and_hg_phase() {
     }
 }
 
-// --------------------------------------------------------- fgf media (issue 5)
+// ------------------------------------------------------------------ fgf media
 
 #[test]
 fn fgf_medium_parses_and_kfbm_length_defaults_to_bbox_diagonal() {
@@ -936,7 +910,7 @@ fn nonexponential_models_and_density_grid() {
     let s = ok(r#"<integrator type="volpath"/>
 <medium type="nonexponential" id="a"><string name="transmittance" value="davis"/><float name="alpha" value="2"/></medium>
 <medium type="nonexponential" id="b"><string name="transmittance" value="davis_weinstein"/><float name="h" value="0.9"/><float name="c" value="0.5"/>
-    <volume type="gridvolume" name="density"><string name="filename" value="../../../../../shared/scenes/density64.vol"/></volume></medium>
+    <volume type="gridvolume" name="density"><string name="filename" value="../../../../scenes/reference/density64.vol"/></volume></medium>
 <medium type="nonexponential" id="c"><string name="transmittance" value="exponential"/></medium>"#);
     let model = |i: usize| match &s.media[i] {
         MediumDesc::NonExponential { model, .. } => *model,
@@ -982,8 +956,10 @@ fn fgf_parameter_errors() {
             &["hurst = -0.7"][..],
         ),
         (
+            // The model's own rule (fgf-core's constructor, through
+            // `SceneDesc::validate`), reported at the parameter.
             r#"<float name="hurst" value="-0.2"/><float name="sw" value="-1"/>"#,
-            &["sw = -1", "sw > 0"][..],
+            &["test.xml:4:", "<float name=\"sw\">", "sw = -1", "> 0"][..],
         ),
         (
             r#"<float name="hurst" value="-0.2"/>"#,
@@ -1046,7 +1022,7 @@ fn fgf_parameter_errors() {
 
 #[test]
 fn truncated_xml_names_the_file_and_position() {
-    let full = std::fs::read_to_string(shared_scene("cube-homogeneous.xml")).unwrap();
+    let full = std::fs::read_to_string(reference_scene("cube-homogeneous.xml")).unwrap();
     let cut = &full[..full.len() / 2];
     let e = load_str(cut, "cut.xml", &data_dir(), &[]).unwrap_err();
     assert_eq!(e.kind, SceneErrorKind::Syntax);
@@ -1718,12 +1694,12 @@ fn a_define_the_scene_never_uses_is_an_error_naming_it() {
         ("spp".to_string(), "2".to_string()),
         ("w".to_string(), "8".to_string()),
     ];
-    assert!(fgf_render::scene::load_str(xml, "t.xml", dir, &ok).is_ok());
+    assert!(fgf_scene::load_str(xml, "t.xml", dir, &ok).is_ok());
     let typo = [
         ("w".to_string(), "8".to_string()),
         ("sps".to_string(), "2".to_string()),
     ];
-    let e = fgf_render::scene::load_str(xml, "t.xml", dir, &typo)
+    let e = fgf_scene::load_str(xml, "t.xml", dir, &typo)
         .unwrap_err()
         .to_string();
     assert!(

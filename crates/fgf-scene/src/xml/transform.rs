@@ -18,8 +18,8 @@
 //!   columns of the matrix are `left, up', dir, origin`.
 
 use super::document::XNode;
-use super::props::{parse_list, xyz_or_value};
-use crate::scene::error::SceneError;
+use super::parse::{parse_f64, parse_list, xyz_or_value};
+use crate::error::SceneError;
 use glam::{DMat4, DVec3, DVec4};
 
 /// Mitsuba 3.9's rotation matrix about `a` by `theta` radians, with `a` used
@@ -71,7 +71,7 @@ pub(crate) fn compose(node: &XNode) -> Result<DMat4, SceneError> {
             "rotate" => {
                 c.check_attrs(&["x", "y", "z", "value", "angle"])?;
                 let axis = DVec3::from(xyz_or_value(c, "rotate", 0.0)?);
-                let angle = super::props::parse_f64(c, "angle", c.req_attr("angle")?)?;
+                let angle = parse_f64(c, "angle", c.req_attr("angle")?)?;
                 let len = axis.length();
                 if len == 0.0 || !len.is_finite() {
                     return Err(c.err(

@@ -6,8 +6,10 @@
 //! parameters. Duplicate names are reported when the bag is built.
 
 use super::document::XNode;
+use super::parse::{parse_f64, parse_list, xyz_or_value};
 use super::transform;
-use crate::scene::error::SceneError;
+use crate::error::SceneError;
+use crate::validate::{out_of_range, out_of_range_rgb, Range};
 use glam::DMat4;
 use std::cell::Cell;
 use std::collections::HashMap;
@@ -178,71 +180,6 @@ impl<'a> Entry<'a> {
     }
 }
 
-/// Parse a finite float; the message names the parameter.
-pub(crate) fn parse_f64(node: &XNode, name: &str, s: &str) -> Result<f64, SceneError> {
-    let v: f64 = s.trim().parse().map_err(|_| {
-        node.err(format!(
-            "cannot parse '{s}' as a number for parameter '{name}'"
-        ))
-    })?;
-    if !v.is_finite() {
-        return Err(node.err(format!("parameter '{name}' = {s} is not a finite number")));
-    }
-    // The description stores single precision: refuse what would overflow
-    // to inf or flush to 0 there, instead of changing the value silently.
-    if v.abs() > f32::MAX as f64 || (v != 0.0 && v.abs() < f32::MIN_POSITIVE as f64) {
-        return Err(node.err(format!(
-            "parameter '{name}' = {s} is outside single precision (|value| must be 0 or between 1.2e-38 and 3.4e38)"
-        )));
-    }
-    Ok(v)
-}
-
-/// Parse `"a, b, c"` or `"a b c"` into finite floats.
-pub(crate) fn parse_list(node: &XNode, name: &str, s: &str) -> Result<Vec<f64>, SceneError> {
-    let v = s
-        .split(|c: char| c == ',' || c.is_whitespace())
-        .filter(|t| !t.is_empty())
-        .map(|t| parse_f64(node, name, t))
-        .collect::<Result<Vec<_>, _>>()?;
-    if v.is_empty() {
-        return Err(node.err(format!("parameter '{name}' has an empty value")));
-    }
-    Ok(v)
-}
-
-/// `x`/`y`/`z` attributes (missing ones are `default`) or `value` with 3
-/// numbers, not both.
-pub(crate) fn xyz_or_value(node: &XNode, name: &str, default: f64) -> Result<[f64; 3], SceneError> {
-    let has_xyz = ["x", "y", "z"].iter().any(|k| node.attr(k).is_some());
-    match node.attr("value") {
-        Some(s) => {
-            if has_xyz {
-                return Err(node.err(format!(
-                    "'{name}' gives both value and x/y/z attributes; use one form"
-                )));
-            }
-            let v = parse_list(node, name, s)?;
-            if v.len() != 3 {
-                return Err(node.err(format!(
-                    "'{name}' value has {} numbers, expected 3 (x, y, z)",
-                    v.len()
-                )));
-            }
-            Ok([v[0], v[1], v[2]])
-        }
-        None => {
-            let mut out = [default; 3];
-            for (i, k) in ["x", "y", "z"].iter().enumerate() {
-                if let Some(s) = node.attr(k) {
-                    out[i] = parse_f64(node, &format!("{name}.{k}"), s)?;
-                }
-            }
-            Ok(out)
-        }
-    }
-}
-
 /// The children of a plugin element.
 pub(crate) struct Props<'a> {
     pub node: &'a XNode,
@@ -394,76 +331,43 @@ impl<'a> Props<'a> {
             .transpose()
     }
 
-    /// A float with a default, checked by `ok`; `range` describes the valid
-    /// values in the message.
-    pub fn float_in(
-        &self,
-        name: &str,
-        default: f64,
-        ok: impl Fn(f64) -> bool,
-        range: &str,
-    ) -> Result<f64, SceneError> {
+    /// A float with a default, checked against `r`.
+    pub fn float_in(&self, name: &str, default: f64, r: Range<f64>) -> Result<f64, SceneError> {
         match self.float(name)? {
             None => Ok(default),
-            Some((v, node)) => check(node, name, v, ok(v), range),
+            Some((v, node)) => check(node, name, v, r),
         }
     }
 
-    /// A required float, checked by `ok`.
-    pub fn float_req(
-        &self,
-        name: &str,
-        ok: impl Fn(f64) -> bool,
-        range: &str,
-    ) -> Result<f64, SceneError> {
+    /// A required float (its range is checked where it is used).
+    pub fn float_required(&self, name: &str) -> Result<f64, SceneError> {
         match self.float(name)? {
-            None => Err(self.node.err(format!(
-                "missing required parameter '{name}' (valid: {range})"
-            ))),
-            Some((v, node)) => check(node, name, v, ok(v), range),
+            None => Err(self
+                .node
+                .err(format!("missing required parameter '{name}'"))),
+            Some((v, _)) => Ok(v),
         }
     }
 
-    /// An integer with a default, checked by `ok`.
-    pub fn int_in(
-        &self,
-        name: &str,
-        default: i64,
-        ok: impl Fn(i64) -> bool,
-        range: &str,
-    ) -> Result<i64, SceneError> {
+    /// An integer with a default, checked against `r`.
+    pub fn int_in(&self, name: &str, default: i64, r: Range<i64>) -> Result<i64, SceneError> {
         match self.int(name)? {
             None => Ok(default),
-            Some((v, node)) => {
-                if ok(v) {
-                    Ok(v)
-                } else {
-                    Err(node.err(format!("invalid {name} = {v} (valid: {range})")))
-                }
-            }
+            Some((v, _)) if (r.ok)(v) => Ok(v),
+            Some((v, node)) => Err(node.err(out_of_range(name, v, r.text))),
         }
     }
 
-    /// A colour with a default, every channel checked by `ok`.
+    /// A colour with a default, every channel checked against `r`.
     pub fn color_in(
         &self,
         name: &str,
         default: [f64; 3],
-        ok: impl Fn(f64) -> bool,
-        range: &str,
+        r: Range<f64>,
     ) -> Result<[f64; 3], SceneError> {
         match self.color(name)? {
             None => Ok(default),
-            Some((v, node)) => {
-                if v.iter().all(|&c| ok(c)) {
-                    Ok(v)
-                } else {
-                    Err(node.err(format!(
-                        "invalid {name} = ({}, {}, {}) (valid: each channel {range})",
-                        v[0], v[1], v[2]
-                    )))
-                }
-            }
+            Some((v, node)) => check_rgb(node, name, v, r),
         }
     }
 
@@ -510,7 +414,14 @@ impl<'a> Props<'a> {
     }
 }
 
-pub(crate) fn check(
+/// `v`, or the error that it is outside `r`.
+pub(crate) fn check(node: &XNode, name: &str, v: f64, r: Range<f64>) -> Result<f64, SceneError> {
+    check_if(node, name, v, (r.ok)(v), r.text)
+}
+
+/// `v` if `ok`, else the error that it is outside `range` (for ranges that
+/// depend on another parameter).
+pub(crate) fn check_if(
     node: &XNode,
     name: &str,
     v: f64,
@@ -520,7 +431,21 @@ pub(crate) fn check(
     if ok {
         Ok(v)
     } else {
-        Err(node.err(format!("invalid {name} = {v} (valid: {range})")))
+        Err(node.err(out_of_range(name, v, range)))
+    }
+}
+
+/// A colour, or the error that a channel is outside `r`.
+pub(crate) fn check_rgb(
+    node: &XNode,
+    name: &str,
+    c: [f64; 3],
+    r: Range<f64>,
+) -> Result<[f64; 3], SceneError> {
+    if c.iter().all(|&v| (r.ok)(v)) {
+        Ok(c)
+    } else {
+        Err(node.err(out_of_range_rgb(name, &c, r.text)))
     }
 }
 

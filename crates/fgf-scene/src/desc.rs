@@ -1,13 +1,16 @@
 //! The plain-data scene description: what the XML loader produces and the
 //! renderer consumes. Everything is already resolved: `$name` defaults are
 //! substituted, references are indices, file paths are loaded, transforms
-//! are composed, units are Mitsuba's (degrees for angles, radiance in W/(m² sr)).
+//! are composed. Units are those of the loader's tables (see
+//! [`crate::xml`]: lengths in scene units, angles in degrees). A
+//! description built in code must pass [`SceneDesc::validate`], which the
+//! renderer calls before it compiles one.
 //!
 //! Colours are linear RGB (`[f32; 3]`); a float in the XML becomes a grey RGB.
 //! Matrices are `glam::Mat4` (column-major in memory, `M * p` convention);
 //! a `to_world` maps the plugin's local space to world space.
 
-use glam::{Mat4, Vec3};
+use glam::{DVec3, Mat4, Vec3};
 use std::sync::Arc;
 
 pub type Rgb = [f32; 3];
@@ -35,7 +38,7 @@ pub struct SceneDesc {
 pub enum IntegratorKind {
     /// `volpath`: volumetric path tracing with NEE + MIS.
     Volpath,
-    /// `path`: surfaces only; a scene with media and `path` is rejected by the loader.
+    /// `path`: surfaces only; a scene with media and `path` is invalid.
     Path,
 }
 
@@ -131,6 +134,50 @@ pub struct ShapeDesc {
     pub exterior: Option<MediumId>,
 }
 
+impl ShapeDesc {
+    /// World-space bounding box (conservative for disks), in f64. The
+    /// loader's default `length` of a k-fBm medium and the ensemble's
+    /// realization grid are both taken from it.
+    pub fn world_bbox(&self) -> (DVec3, DVec3) {
+        let m = self.to_world.as_dmat4();
+        let mut lo = DVec3::splat(f64::INFINITY);
+        let mut hi = DVec3::splat(f64::NEG_INFINITY);
+        let mut add = |p: DVec3| {
+            let q = m.transform_point3(p);
+            lo = lo.min(q);
+            hi = hi.max(q);
+        };
+        let corners = |a: DVec3, b: DVec3, add: &mut dyn FnMut(DVec3)| {
+            for i in 0..8 {
+                add(DVec3::new(
+                    if i & 1 == 0 { a.x } else { b.x },
+                    if i & 2 == 0 { a.y } else { b.y },
+                    if i & 4 == 0 { a.z } else { b.z },
+                ));
+            }
+        };
+        match &self.geometry {
+            GeometryDesc::Cube => corners(DVec3::splat(-1.0), DVec3::splat(1.0), &mut add),
+            GeometryDesc::Rectangle | GeometryDesc::Disk => corners(
+                DVec3::new(-1.0, -1.0, 0.0),
+                DVec3::new(1.0, 1.0, 0.0),
+                &mut add,
+            ),
+            GeometryDesc::Sphere { center, radius } => {
+                let c = center.as_dvec3();
+                let r = DVec3::splat(*radius as f64);
+                corners(c - r, c + r, &mut add)
+            }
+            GeometryDesc::Mesh(mesh) => {
+                for p in &mesh.positions {
+                    add(p.as_dvec3());
+                }
+            }
+        }
+        (lo, hi)
+    }
+}
+
 #[derive(Debug, Clone, PartialEq)]
 pub enum BsdfDesc {
     Diffuse {
@@ -196,9 +243,9 @@ pub enum VolumeDesc {
 
 #[derive(Debug, Clone)]
 pub struct GridVolumeDesc {
-    /// The loaded grid: 1 or 3 channels (6-channel grids are refused), every
-    /// value checked by the loader (`sigma_t` and `density` >= 0, `albedo` in
-    /// [0, 1]); its to_world is invertible in f32.
+    /// The grid: 1 or 3 channels (1 for a `density`), its values finite and
+    /// `>= 0` (`sigma_t`, `density`) or in [0, 1] (`albedo`); `to_world` is
+    /// invertible in f32 (see [`SceneDesc::validate`]).
     pub grid: Arc<fgf_io::vol::VolGrid>,
     /// Volume-space to world. Unless `use_grid_bbox`, the grid spans the unit
     /// cube `[0,1]^3` in volume space; with it, the file's bounding box.
@@ -229,10 +276,10 @@ pub enum KernelDesc {
 pub enum TransmittanceDesc {
     /// `fgf` plugin: `hurst`, `sw`, optional `length` (k-fBm only; default:
     /// the diagonal of the bounding box of the shapes bounding this medium).
-    /// The loader resolves the default: `length` is always `Some` for k-fBm
-    /// (`hurst > 0`) and always `None` for white and pink noise, and the
-    /// parameters were accepted by `fgf_core::transmittance::Fgf::new` for
-    /// every channel's `sigma_t`.
+    /// The loader resolves the default: `length` is `Some` for k-fBm
+    /// (`hurst > 0`) and `None` for white and pink noise, as
+    /// `fgf_core::transmittance::Fgf::new` requires of every channel's model
+    /// (see [`SceneDesc::validate`]).
     Fgf {
         hurst: f64,
         sw: f64,

@@ -2,7 +2,7 @@
 //! `<include>` expanded, `<default>`s applied and every `$name` substituted.
 //! Each node remembers its file and line so that later errors can name them.
 
-use crate::scene::error::{SceneError, SceneErrorKind};
+use crate::error::{SceneError, SceneErrorKind};
 use std::cell::RefCell;
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};

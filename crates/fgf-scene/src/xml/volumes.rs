@@ -1,0 +1,228 @@
+//! `<volume>`: the 3D textures a medium takes for `sigma_t` and `albedo`
+//! (see [`super::media`]) and for the `density` of a non-exponential medium
+//! (see [`super::nonexp`]): `gridvolume`, a Mitsuba `.vol` grid file
+//! (float32; format in `fgf_io::vol`), and `constvolume`, a constant. The
+//! values are checked against the range of the parameter the volume is
+//! given for: `sigma_t` and `density` ≥ 0, `albedo` in [0, 1].
+//!
+//! | plugin | parameter | type | units | range | default | meaning |
+//! |---|---|---|---|---|---|---|
+//! | `gridvolume` | `filename` | string | – | a `.vol` file of 1 or 3 channels (1 for `density`), relative to the scene file, at most 4 GiB | required | |
+//! | `gridvolume` | `to_world` | transform | – | invertible | identity | volume space to world |
+//! | `gridvolume` | `use_grid_bbox` | boolean | – | – | false | false: the grid spans the unit cube `[0, 1]³` of volume space; true: the bounding box in the file (which must not be empty) |
+//! | `gridvolume` | `filter_type` | string | – | `trilinear`, `nearest` | `trilinear` | interpolation between voxel centres |
+//! | `gridvolume` | `wrap_mode` | string | – | `clamp` | `clamp` | the other Mitsuba modes are not supported |
+//! | `constvolume` | `value` | float or rgb | that of the parameter | that of the parameter | 1 | |
+//!
+//! ```xml
+//! <volume type="gridvolume" name="sigma_t">
+//!     <string name="filename" value="density64.vol"/>
+//!     <string name="filter_type" value="nearest"/>
+//!     <transform name="to_world"><translate value="-0.5, 0, -0.5"/></transform>
+//! </volume>
+//! <volume type="constvolume" name="albedo"><rgb name="value" value="0.9, 0.8, 0.7"/></volume>
+//! ```
+//!
+//! ```python
+//! import fgf
+//! field = fgf.synthesize((64, 64, 64), hurst=-0.1, seed=1)
+//! fgf.save_field("density.vol", field, mean=4.0, clamp_min=0.0)  # sigma_t >= 0
+//! img = fgf.render("scene.xml")  # a scene whose gridvolume reads density.vol
+//! ```
+
+use super::context::{check_object_attrs, rgb, to_invertible_mat4, Ctx};
+use super::document::XNode;
+use super::props::{check_rgb, Entry, Props};
+use crate::desc::*;
+use crate::error::{SceneError, SceneErrorKind};
+use crate::validate::Range;
+use glam::Mat4;
+use std::sync::Arc;
+
+/// `.vol` files larger than this (4 GiB) are refused before reading.
+const MAX_VOL_BYTES: u64 = 1 << 32;
+
+fn take_named_volume<'a, 'p>(p: &'p Props<'a>, name: &str) -> Option<&'p Entry<'a>> {
+    p.take(name).or_else(|| p.take_object_named("volume", name))
+}
+
+/// A float/rgb parameter or a nested `<volume name=...>`.
+pub(crate) fn volume_of(
+    ctx: &Ctx,
+    p: &Props,
+    name: &str,
+    default: f64,
+    r: Range<f64>,
+) -> Result<VolumeDesc, SceneError> {
+    let Some(e) = take_named_volume(p, name) else {
+        return Ok(VolumeDesc::Constant([default as f32; 3]));
+    };
+    if e.is_property() {
+        let c = check_rgb(e.node, name, e.color()?, r)?;
+        return Ok(VolumeDesc::Constant(rgb(c)));
+    }
+    volume(ctx, e.target, name, r)
+}
+
+fn volume(ctx: &Ctx, n: &XNode, name: &str, r: Range<f64>) -> Result<VolumeDesc, SceneError> {
+    check_object_attrs(n)?;
+    let ty = n.attr("type").unwrap_or("");
+    match ty {
+        "constvolume" => {
+            let p = Props::new(n, &ctx.ids, &["value"])?;
+            let c = p.color_in("value", [1.0; 3], r)?;
+            p.finish()?;
+            Ok(VolumeDesc::Constant(rgb(c)))
+        }
+        "gridvolume" => Ok(VolumeDesc::Grid(gridvolume(ctx, n, name, r)?)),
+        _ => Err(n.err(format!(
+            "unknown volume type '{ty}' (supported: gridvolume, constvolume)"
+        ))),
+    }
+}
+
+pub(crate) fn gridvolume(
+    ctx: &Ctx,
+    n: &XNode,
+    name: &str,
+    r: Range<f64>,
+) -> Result<GridVolumeDesc, SceneError> {
+    let p = Props::new(
+        n,
+        &ctx.ids,
+        &[
+            "filename",
+            "to_world",
+            "filter_type",
+            "use_grid_bbox",
+            "wrap_mode",
+        ],
+    )?;
+    let (file, fnode) = p.string("filename")?.ok_or_else(|| {
+        n.err("missing required parameter 'filename' (a Mitsuba .vol file, relative to the scene file)")
+    })?;
+    let path = fnode.resolve(file);
+    let size = std::fs::metadata(&path)
+        .map_err(|e| {
+            fnode.err_kind(
+                SceneErrorKind::Io,
+                format!("cannot read grid '{}': {e}", path.display()),
+            )
+        })?
+        .len();
+    if size > MAX_VOL_BYTES {
+        return Err(fnode.err_kind(
+            SceneErrorKind::Format,
+            format!(
+                "grid '{}' is {size} bytes, more than the {MAX_VOL_BYTES}-byte limit",
+                path.display()
+            ),
+        ));
+    }
+    check_vol_size(fnode, &path, size)?;
+    let grid = fgf_io::vol::read_vol(&path).map_err(|e| {
+        let kind = match e {
+            fgf_io::IoError::Io { .. } => SceneErrorKind::Io,
+            fgf_io::IoError::Format { .. } => SceneErrorKind::Format,
+        };
+        fnode.err_kind(kind, format!("cannot load grid: {e}"))
+    })?;
+    if grid.channels == 6 {
+        return Err(fnode.err_kind(
+            SceneErrorKind::Format,
+            format!(
+                "grid '{}' has 6 channels; '{name}' needs 1 (scalar) or 3 (rgb)",
+                path.display()
+            ),
+        ));
+    }
+    if let Some(i) = grid.data.iter().position(|&v| !(r.ok)(v as f64)) {
+        return Err(fnode.err_kind(
+            SceneErrorKind::Format,
+            format!(
+                "grid '{}' value #{i} = {} is out of range for '{name}' (valid: {})",
+                path.display(),
+                grid.data[i],
+                r.text
+            ),
+        ));
+    }
+    let to_world = match p.transform("to_world")? {
+        Some((m, node)) => to_invertible_mat4(node, m)?,
+        None => Mat4::IDENTITY,
+    };
+    let filter = match p
+        .choice("filter_type", "trilinear", &["trilinear", "nearest"])?
+        .as_str()
+    {
+        "nearest" => GridFilter::Nearest,
+        _ => GridFilter::Trilinear,
+    };
+    let use_grid_bbox = p.bool_or("use_grid_bbox", false)?;
+    if use_grid_bbox {
+        let b = grid.bbox;
+        if !(b[3] > b[0] && b[4] > b[1] && b[5] > b[2]) {
+            return Err(fnode.err_kind(
+                SceneErrorKind::Format,
+                format!(
+                    "use_grid_bbox is true but grid '{}' has an empty bounding box [{}, {}, {}] - [{}, {}, {}]",
+                    path.display(),
+                    b[0], b[1], b[2], b[3], b[4], b[5]
+                ),
+            ));
+        }
+    }
+    if let Some((w, node)) = p.string("wrap_mode")? {
+        if w != "clamp" {
+            return Err(node.err(format!("wrap_mode '{w}' is not supported (valid: clamp)")));
+        }
+    }
+    p.finish()?;
+    Ok(GridVolumeDesc {
+        grid: Arc::new(grid),
+        to_world,
+        use_grid_bbox,
+        filter,
+        wrap_clamp: true,
+    })
+}
+
+/// Check that the resolution in a `.vol` header matches the file size with
+/// overflow-checked arithmetic, before `read_vol` sees the file: a hostile
+/// header (say 1e9 x 1e9 x 1e9) must be a clean error, never an overflow.
+/// Headers too short or without the magic bytes are left to `read_vol`,
+/// which explains them.
+fn check_vol_size(fnode: &XNode, path: &std::path::Path, size: u64) -> Result<(), SceneError> {
+    use std::io::Read;
+    let mut head = [0u8; 24];
+    let Ok(mut f) = std::fs::File::open(path) else {
+        return Ok(());
+    };
+    if f.read_exact(&mut head).is_err() || &head[0..3] != b"VOL" {
+        return Ok(());
+    }
+    let dim = |i: usize| i32::from_le_bytes(head[i..i + 4].try_into().expect("4 bytes"));
+    let dims = [dim(8), dim(12), dim(16), dim(20)];
+    if dims.iter().any(|&d| d <= 0) {
+        return Ok(());
+    }
+    let needed = dims
+        .iter()
+        .try_fold(4u64, |acc, &d| acc.checked_mul(d as u64))
+        .and_then(|n| n.checked_add(48));
+    if needed != Some(size) {
+        return Err(fnode.err_kind(
+            SceneErrorKind::Format,
+            format!(
+                "invalid .vol file '{}': it is {size} bytes but its header declares a {}x{}x{} grid with {} channel(s), which needs {}",
+                path.display(),
+                dims[0],
+                dims[1],
+                dims[2],
+                dims[3],
+                needed.map(|n| format!("{n} bytes")).unwrap_or_else(|| "more than 2^64 bytes".into())
+            ),
+        ));
+    }
+    Ok(())
+}
