@@ -1,12 +1,12 @@
 """Benchmark: fgf field synthesis against a straightforward numpy + scipy.fft
-implementation of the same algorithm (issue 3).
+implementation of the same algorithm.
 
 Cases (256^3, float32 output, spacing 1/256, S_w = 1):
 
 * pink noise, H = -0.1 (periodic domain = the grid);
 * 2-fBm, H = 1.5, padding 2 (periodic domain 512^3), anchored at the corner.
 
-The scipy version does what ``theory.md`` §1 says in the obvious way:
+The scipy version does what ``docs/theory.md`` §1 says in the obvious way:
 float32 noise from ``numpy.random.default_rng``, ``scipy.fft.rfftn``
 (``workers=2``), multiply by ``sqrt(S_w/dx^3) |k|^(-s)`` (``k = 0`` and, for
 k-fBm, Nyquist modes dropped), the Taylor sums of the anchored k-fBm on the

@@ -1,4 +1,4 @@
-"""Non-exponential media benchmark (issue 5): the cost of the fgf medium
+"""Non-exponential media benchmark: the cost of the fgf medium
 against the classical exponential one on the same scene.
 
     python benchmarks/bench_nonexp.py [--res 256] [--spp 64] [--threads N] [--repeat 2]
@@ -13,7 +13,7 @@ Takes ``scenes/reference/cube-homogeneous.xml`` and swaps its medium (sigma_t 4,
 
 the fgf media under both kernels. Each render is warmed up once, then timed
 ``--repeat`` times (best kept) and reported as samples per second (pixels x spp / wall time)
-and as its cost relative to the exponential render (issue 5's target:
+and as its cost relative to the exponential render (the target:
 within 1.3x). Non-exponential media also change the paths themselves
 (heavier-tailed free flights, so a different number of scattering events
 per path), so the ratio measures whole-render cost, not only the per-flight

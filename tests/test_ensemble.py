@@ -1,10 +1,10 @@
 """``fgf ensemble`` / ``fgf.ensemble``: explicit-realization ground truth for
-``fgf`` media (issue 5).
+``fgf`` media.
 
 Fast tests: the outputs exist and have the documented shapes; the result is
 identical for any thread count; the report is printed; bad input is one
 clear error line. The slow test compares the model with the ensemble in the
-low-variance regime where the gamma closure is accurate (``theory.md`` §3).
+low-variance regime where the gamma closure is accurate (``docs/theory.md`` §3).
 """
 
 from __future__ import annotations

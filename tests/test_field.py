@@ -1,4 +1,4 @@
-"""Field synthesis, exact samplers, estimators, exports and ``fgf field`` (issue 3): fast tests.
+"""Field synthesis, exact samplers, estimators, exports and ``fgf field``: fast tests.
 
 The statistical ensemble tests are in ``test_field_stats.py`` (slow step).
 """

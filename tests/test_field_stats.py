@@ -5,7 +5,7 @@ estimated from the independent replicates (seeds or rays) of that check,
 fixed seeds, and ``Z = 4`` (two-sided p = 6.3e-5 per comparison). There are
 fewer than 50 comparisons in this file, so the family-wise error rate is
 below 0.3 %. Expected values are closed forms computed here with scipy, or
-the discrete spectral sum for grid fields (``theory.md`` §1: grid fields are
+the discrete spectral sum for grid fields (``docs/theory.md`` §1: grid fields are
 validated against the discrete sum, not the continuum).
 """
 

@@ -14,7 +14,7 @@ family error rates below are what a fresh seed would risk):
   Bonferroni the family error rate is ≤ 60 · 6.3e-5 ≈ 0.4 %.
 * quadrature against the closed form: relative error ≤ 1e-6 (QUADPACK at
   epsrel 1e-10…1e-12; the closed forms match the double integral to 8+
-  digits, theory.md §2).
+  digits, docs/theory.md §2).
 * transmittance, white and pink noise: the ensemble average of e^(−τ) over
   exact realizations within z = 4.5 SE of the exact Gaussian average
   exp(−σ_m t + t² var/2) at every grid point with Tr ≥ 0.02 (≈ 3 × 200

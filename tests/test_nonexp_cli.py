@@ -1,5 +1,5 @@
-"""The ``fgf`` and ``nonexponential`` media end to end through ``fgf render``
-(issue 5): scenes render, and invalid parameters give one clear error line
+"""The ``fgf`` and ``nonexponential`` media end to end through ``fgf render``:
+scenes render, and invalid parameters give one clear error line
 (exit code 2, no traceback, no output file) that names the parameter and
 its valid range. The physics of the media is tested in Rust
 (``crates/fgf-render/tests/nonexp_*.rs``).

@@ -1,4 +1,4 @@
-"""FGF statistics (theory.md §1-2) through the Python API, against
+"""FGF statistics (docs/theory.md §1-2) through the Python API, against
 independent numerical integrals computed with scipy."""
 
 from __future__ import annotations

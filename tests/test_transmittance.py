@@ -1,4 +1,4 @@
-"""Python surface of the transmittance models (issue 2): shapes and types,
+"""Python surface of the transmittance models: shapes and types,
 the numerical identities through the binding, KS tests of the samplers,
 equality with the Rust core (pinned values), and parameter errors."""
 

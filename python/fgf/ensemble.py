@@ -3,7 +3,7 @@
 Each ``fgf`` medium of the scene is replaced, realization by realization,
 by an explicit 3D grid ``sigma_t(x) = max(0, sigma_m rho(x) + sigma_u(x))``
 where ``sigma_u`` is a fractional Gaussian field synthesised with the 1D ray
-statistics of the model (``S_w3 = S_w 2pi(2H+1)``, ``theory.md`` §1); every
+statistics of the model (``S_w3 = S_w 2pi(2H+1)``, ``docs/theory.md`` §1); every
 realization is rendered classically (delta/ratio tracking) and the images
 are averaged. The per-pixel standard error of that average comes with it.
 The full description (grid placement, clamping, the grid-variance caveat)

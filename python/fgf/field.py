@@ -1,4 +1,4 @@
-"""Realizations of fractional Gaussian fields (``theory.md`` §1).
+"""Realizations of fractional Gaussian fields (``docs/theory.md`` §1).
 
 * :func:`synthesize`: spectral FFT synthesis on 1D/2D/3D grids (white
   noise, pink noise, k-fBm for k = 1, 2, 3), float32 or float64, C order
@@ -84,7 +84,7 @@ def synthesize(
 ) -> FloatField:
     """Synthesize one realization of a fractional Gaussian field on a grid.
 
-    Spectral method of ``theory.md`` §1: cell-averaged white noise of
+    Spectral method of ``docs/theory.md`` §1: cell-averaged white noise of
     variance ``sw / spacing**d``, filtered by ``|k|^(-s)`` with ``s = hurst +
     d/2`` on a periodic domain, ``k = 0`` dropped. A k-fBm (``hurst > 0``) is
     synthesized on a padded domain and anchored: its Taylor polynomial of
@@ -176,7 +176,7 @@ def discrete_spectral_variance(
     The discrete spectral sum ``sw / spacing**d * (1/N) * sum_{k != 0} |k|^(-2s)``
     over the periodic domain (Nyquist modes excluded for k-fBm). Grid fields
     must be validated against this, not against the continuum variance,
-    which in 3D is approached very slowly (``theory.md`` §1).
+    which in 3D is approached very slowly (``docs/theory.md`` §1).
 
     Examples
     --------
@@ -195,7 +195,7 @@ def padded_shape(shape: int | Sequence[int], hurst: float, padding: float | None
 def sw_3d_for_ray_statistics(hurst: float, sw: float) -> float:
     """``S_w`` of a 3D field whose restriction to any line has the 1D model's covariance.
 
-    ``S_w3 = S_w * 2*pi*(2H+1)`` (``theory.md`` §1), for ``hurst > -1/2``.
+    ``S_w3 = S_w * 2*pi*(2H+1)`` (``docs/theory.md`` §1), for ``hurst > -1/2``.
 
     Examples
     --------

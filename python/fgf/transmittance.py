@@ -1,4 +1,4 @@
-"""Transmittance models and FGF statistics (``theory.md`` §2–4).
+"""Transmittance models and FGF statistics (``docs/theory.md`` §2–4).
 
 Four models share one interface, in distance units for a mean extinction
 ``sigma_t`` (1/length):
@@ -329,7 +329,7 @@ class Exponential(TransmittanceModel):
 
 
 class Fgf(TransmittanceModel):
-    """FGF gamma-closure transmittance (Guo et al. 2019, ``theory.md`` §3).
+    """FGF gamma-closure transmittance (Guo et al. 2019, ``docs/theory.md`` §3).
 
     The line-averaged extinction over a segment of length ``t`` is a gamma
     variable with mean ``sigma_t`` and variance ``variance(t)``; then
@@ -531,7 +531,7 @@ class DavisWeinstein(TransmittanceModel):
         return self._m.params()["c"]
 
 
-# --- statistics (theory.md §1-2) ---
+# --- statistics (docs/theory.md §1-2) ---
 
 
 @overload

@@ -2,7 +2,7 @@
 //!
 //! The analytic heart of fgf: constants of fractional Gaussian fields, the
 //! variance of the line-averaged extinction, and the gamma-closure
-//! transmittance models with their free-flight samplers (`theory.md` §1–4).
+//! transmittance models with their free-flight samplers (`docs/theory.md` §1–4).
 //!
 //! Conventions used throughout the workspace:
 //! * distances `t` are in scene units, extinctions `sigma_t` in 1/unit,

@@ -1,4 +1,4 @@
-//! Statistics of fractional Gaussian fields (`theory.md` §1–2).
+//! Statistics of fractional Gaussian fields (`docs/theory.md` §1–2).
 //!
 //! An FGF `M = (-Δ)^(-s/2) W` with white-noise strength `S_w` (`sw`) and
 //! Hurst parameter `H = s - d/2` (`hurst`). Along a ray the extinction is
@@ -28,7 +28,7 @@
 
 use crate::error::{ParamError, Result};
 
-/// Which closed form of `theory.md` §2 applies for a Hurst parameter.
+/// Which closed form of `docs/theory.md` §2 applies for a Hurst parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Regime {
     /// `H = -1/2`: uncorrelated extinction, `var[σ̄_t] = S_w / t`.
@@ -105,7 +105,7 @@ fn ln_gamma(x: f64) -> (f64, f64) {
 }
 
 /// `C(H, d) = Γ(-H) / (2^(2H+d) π^(d/2) Γ(H + d/2))`, the constant of the
-/// pink-noise covariance `cov(x, y) = C(H,d) S_w |x-y|^(2H)` (`theory.md` §1).
+/// pink-noise covariance `cov(x, y) = C(H,d) S_w |x-y|^(2H)` (`docs/theory.md` §1).
 ///
 /// Evaluated as `sign · exp(lnΓ(-H) - lnΓ(H+d/2) - ...)` so that large `|H|`
 /// does not overflow. `1/Γ(H + d/2)` is taken as 0 at the poles of Γ (e.g.
@@ -143,7 +143,7 @@ fn ln_s_p(hurst: f64, sw: f64) -> f64 {
 }
 
 /// `S_p(H) = S_w / (Γ(2H+3) |sin πH|)`: pink-noise line-average variance
-/// `var[σ̄_t] = S_p t^(2H)` for `-1/2 < H < 0` (`theory.md` §2). At
+/// `var[σ̄_t] = S_p t^(2H)` for `-1/2 < H < 0` (`docs/theory.md` §2). At
 /// `H = -1/2` it equals `S_w`, so the white-noise law `S_w / t` is its limit.
 /// No validation: see [`line_average_variance`] for the checked entry point.
 pub fn s_p(hurst: f64, sw: f64) -> f64 {
@@ -167,7 +167,7 @@ fn ln_s_kf(hurst: f64, sw: f64) -> f64 {
 
 /// `S_kf(H) = S_w binom(2H-1, k-1) / (Γ(2H+2) |sin πH|)`, `k = ⌈H⌉`:
 /// k-fBm line-average variance `var[σ̄_t] = S_kf L^(2H)` for `k-1 < H < k`
-/// (`theory.md` §2). Equals the point variance of the anchored k-fBm
+/// (`docs/theory.md` §2). Equals the point variance of the anchored k-fBm
 /// averaged over `[0, L]`, divided by `L^(2H)`. Evaluated in log space. No
 /// validation (NaN for `H ≤ 0`): see [`line_average_variance`].
 pub fn s_kf(hurst: f64, sw: f64) -> f64 {
@@ -177,7 +177,7 @@ pub fn s_kf(hurst: f64, sw: f64) -> f64 {
     ln_s_kf(hurst, sw).exp()
 }
 
-/// Point variance of the anchored k-fBm (`theory.md` §1):
+/// Point variance of the anchored k-fBm (`docs/theory.md` §1):
 /// `var M~(x) = 2 C(H,1) S_w (-1)^k binom(2H-1, k-1) |x|^(2H)`, `k = ⌈H⌉`.
 ///
 /// Evaluated as `(2H+1) S_kf |x|^(2H)` in log space (the same quantity:
@@ -230,7 +230,7 @@ pub(crate) fn check_length(regime: Regime, length: Option<f64>) -> Result<Option
 }
 
 /// `var[σ̄_t]`, the variance of the extinction averaged over a segment of
-/// length `t` (`theory.md` §2), for any valid regime.
+/// length `t` (`docs/theory.md` §2), for any valid regime.
 ///
 /// * `hurst`: see [`Regime::from_hurst`];
 /// * `sw`: `S_w > 0`, finite;
@@ -291,7 +291,7 @@ mod tests {
 
     #[test]
     fn c_const_known_values_and_identities() {
-        // theory.md §1: C(1/2, 1) = -1/2.
+        // docs/theory.md §1: C(1/2, 1) = -1/2.
         assert!(rel(c_const(0.5, 1), -0.5) < 1e-14);
         for h in [-0.45, -0.3, -0.1, 0.2, 0.7, 1.2, 1.8, 2.5] {
             // 1D closed form -1 / (2 Γ(2H+1) sin πH).
@@ -331,7 +331,7 @@ mod tests {
         assert!(rel(s_p(-0.5 + 1e-9, 3.0), 3.0) < 1e-7);
     }
 
-    /// Point variance by the independent form of theory.md §1, the variance of
+    /// Point variance by the independent form of docs/theory.md §1, the variance of
     /// M minus its Taylor polynomial through the generalised covariance:
     /// `-2 C(H,1) S_w x^(2H) Σ_{j<k} (-1)^j binom(2H, j)`.
     #[test]

@@ -1,4 +1,4 @@
-//! Properties of every transmittance model (`theory.md` §3–4): Tr(0) = 1,
+//! Properties of every transmittance model (`docs/theory.md` §3–4): Tr(0) = 1,
 //! monotone Tr, ∫p = 1, p(0) = σ̄, the derivative identities of the four
 //! reciprocal functions by finite differences, limits, the Davis and
 //! Davis–Weinstein equivalences, sampler round trips, finiteness over

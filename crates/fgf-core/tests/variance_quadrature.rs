@@ -1,4 +1,4 @@
-//! `theory.md` §2 closed forms against independent numerical integrals of
+//! `docs/theory.md` §2 closed forms against independent numerical integrals of
 //! the covariance.
 
 mod common;

@@ -1,4 +1,4 @@
-//! Exact 1D samplers, the ground truth for verification (`theory.md` §1,
+//! Exact 1D samplers, the ground truth for verification (`docs/theory.md` §1,
 //! "Exact 1D samplers").
 //!
 //! * [`sample_optical_depth`]: the fluctuating optical depth
@@ -11,7 +11,7 @@
 //! * [`sample_kfbm_1d`]: the anchored 1D k-fBm (`k-1 < H < k`) at `x_i = i L/n`
 //!   by Cholesky factorisation of its covariance
 //!   `C(H,1) S_w [|x-y|^(2H) - Σ_{j<k} binom(2H,j) ((-x)^j y^(2H-j) + (-y)^j x^(2H-j))]`
-//!   (for `x, y > 0`; the Taylor subtraction of `theory.md` §1 in 1D, whose
+//!   (for `x, y > 0`; the Taylor subtraction of `docs/theory.md` §1 in 1D, whose
 //!   diagonal is the point variance `2 C S_w (-1)^k binom(2H-1,k-1) x^(2H)`).
 //!   Cost `n³/3` flops and `8 n²` bytes: limited to
 //!   [`MAX_CHOLESKY_STEPS`] = 4096 steps (128 MiB, ~10 s on two cores).

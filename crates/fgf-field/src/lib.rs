@@ -1,6 +1,6 @@
 //! # fgf-field
 //!
-//! Realizations of fractional Gaussian fields (`theory.md` §1): spectral
+//! Realizations of fractional Gaussian fields (`docs/theory.md` §1): spectral
 //! synthesis on 1D/2D/3D grids ([`synthesize`]), exact 1D samplers
 //! ([`sample_optical_depth`], [`sample_kfbm_1d`]), estimators
 //! ([`estimators`]) and file exports ([`export`]).
@@ -18,7 +18,7 @@
 //! * **Spectrum.** `P(k) = S_w |k|^(-2s)` with `s = H + d/2`, for the Fourier
 //!   convention `f̂(k) = ∫ f(x) e^{-ik·x} dx` and covariance
 //!   `∫ P(k) e^{ik·r} dk/(2π)^d`; this makes `cov = C(H,d) S_w |r|^(2H)`
-//!   with `theory.md`'s `C(H,d)`.
+//!   with `docs/theory.md`'s `C(H,d)`.
 //! * **FFT normalisation.** Forward transforms are unnormalised
 //!   (`X_m = Σ_j x_j e^{-2πi jm/n}`), inverse transforms are unnormalised
 //!   too and the `1/N` is folded into the spectral filter, as in RustFFT.
@@ -27,7 +27,7 @@
 //!   spectrum) is stored.
 //! * **Grid variance.** The variance of a grid field is the discrete spectral
 //!   sum ([`discrete_spectral_variance`]), not the continuum value: in 3D
-//!   the difference is large (`theory.md` §1, caveat for 3D grids). To give
+//!   the difference is large (`docs/theory.md` §1, caveat for 3D grids). To give
 //!   a 3D field the 1D statistics of the rendering model along every ray,
 //!   use `S_w3` from [`sw_3d_for_ray_statistics`].
 //! * **Determinism.** All noise comes from counter-based streams indexed by

@@ -4,19 +4,15 @@
 //! Values include the cosine `|wo.z|`, so a sampled weight is
 //! `eval / pdf` and a delta lobe returns its weight directly.
 //!
-//! | XML | parameters | notes |
-//! |---|---|---|
-//! | `diffuse` | `reflectance` (rgb in \[0, 1\], default 0.5) | one-sided: black seen from the back |
-//! | `null` | — | index-matched boundary: the path passes straight through; it neither counts toward `max_depth` nor is lit |
-//! | `dielectric` | `int_ior` (inside, default 1.5046), `ext_ior` (default 1.000277), `specular_reflectance`, `specular_transmittance` (default 1) | smooth, both sides; transmitted radiance is scaled by `(η_i/η_t)²` (Mitsuba's non-symmetric transport in radiance mode) |
-//! | `conductor` | `material` or `eta`, `k`, `specular_reflectance` | smooth, complex Fresnel per channel; one-sided |
-//! | `twosided` | one nested BSDF | the nested BSDF on both sides |
+//! The user documentation (parameters, units, ranges, defaults, an XML and
+//! a Python example) is the table at the head of [`fgf_scene::xml::bsdfs`];
+//! the notes here are about the implementation.
 //!
-//! ```xml
-//! <bsdf type="dielectric">
-//!     <float name="int_ior" value="1.5"/>
-//! </bsdf>
-//! ```
+//! * `diffuse`: one-sided: black seen from the back
+//! * `null`: index-matched boundary: the path passes straight through; it neither counts toward `max_depth` nor is lit
+//! * `dielectric`: smooth, both sides; transmitted radiance is scaled by `(η_i/η_t)²` (Mitsuba's non-symmetric transport in radiance mode)
+//! * `conductor`: smooth, complex Fresnel per channel; one-sided
+//! * `twosided`: the nested BSDF on both sides
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::Spectrum;

@@ -1,21 +1,13 @@
 //! Light sources. Next-event estimation picks one emitter uniformly
 //! (Mitsuba's default `sampling_weight` of 1 for all) and samples it.
 //!
-//! | XML | parameters | notes |
-//! |---|---|---|
-//! | `area` (inside a shape) | `radiance` (W/(m² sr)) | one-sided: emits toward the shape's normal side |
-//! | `point` | `position` or `to_world`, `intensity` (W/sr) | |
-//! | `spot` | `to_world` (looks down local +z), `intensity` (W/sr), `cutoff_angle` (deg, default 20), `beam_width` (deg, default 0.75·cutoff) | full intensity inside `beam_width`, then falling linearly in the angle to 0 at `cutoff_angle` (measured against Mitsuba 3.9.1) |
-//! | `directional` | `direction` (the light travels along it), `irradiance` (W/m²) | |
-//! | `constant` | `radiance` | uniform environment |
+//! The user documentation (parameters, units, ranges, defaults, an XML and
+//! a Python example) is the table at the head of [`fgf_scene::xml::emitters`];
+//! the notes here are about the implementation.
 //!
-//! ```xml
-//! <emitter type="spot">
-//!     <transform name="to_world"><lookat origin="0, 4, 0" target="0, 0, 0"/></transform>
-//!     <rgb name="intensity" value="20"/>
-//!     <float name="cutoff_angle" value="25"/>
-//! </emitter>
-//! ```
+//! * `area` (inside a shape): one-sided: emits toward the shape's normal side
+//! * `spot`: full intensity inside `beam_width`, then falling linearly in the angle to 0 at `cutoff_angle` (measured against Mitsuba 3.9.1)
+//! * `constant`: uniform environment
 
 use crate::geometry::Geometry;
 use crate::math::{sample_uniform_sphere, UNIFORM_SPHERE_PDF};

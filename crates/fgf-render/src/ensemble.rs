@@ -1,6 +1,6 @@
 //! Ground truth from explicit realizations: the ensemble average
 //! of classical renders of random 3D media, to compare with the `fgf`
-//! model's render (`theory.md` §1, §3 "against explicit Gaussian
+//! model's render (`docs/theory.md` §1, §3 "against explicit Gaussian
 //! realizations").
 //!
 //! # What it does
@@ -22,7 +22,7 @@
 //!   up with `nearest` filtering, since each synthesized sample is the
 //!   average of the field over its cell.
 //! * Negative extinction is clamped to 0; the fraction of clamped values is
-//!   reported. Compare with the model only where it is small (`theory.md`
+//!   reported. Compare with the model only where it is small (`docs/theory.md`
 //!   §3).
 //!
 //! Each realization is rendered classically (a `heterogeneous` medium:
@@ -34,7 +34,7 @@
 //!
 //! A 3D grid misses the field's variance above its Nyquist frequency, and
 //! for pink noise the missing fraction of the line-average variance decays
-//! slowly with resolution (`theory.md` §1). The report therefore gives, per
+//! slowly with resolution (`docs/theory.md` §1). The report therefore gives, per
 //! medium, the line-average variance along x over one mean free path
 //! `1/σ_m` measured on the realizations, next to the continuum value of the
 //! model; their ratio is how much of the model's fluctuation the grids
@@ -119,7 +119,7 @@ pub struct MediumReport {
     /// `var[σ̄_u]` over segments of length `ℓ` along x, measured on the
     /// realizations (mean of the squared segment averages).
     pub realized_variance: f64,
-    /// The model's continuum `var[σ̄_t](ℓ)` (`theory.md` §2).
+    /// The model's continuum `var[σ̄_t](ℓ)` (`docs/theory.md` §2).
     pub continuum_variance: f64,
 }
 

@@ -3,14 +3,9 @@
 //! scatters forward). Both models are sampled exactly, so the sampling
 //! weight `p/pdf` is 1.
 //!
-//! | XML | parameters |
-//! |---|---|
-//! | `isotropic` | — |
-//! | `hg` | `g` ∈ (-1, 1), mean cosine (default 0.8 in Mitsuba) |
-//!
-//! ```xml
-//! <phase type="hg"><float name="g" value="0.5"/></phase>
-//! ```
+//! The user documentation (parameters, units, ranges, defaults, an XML and
+//! a Python example) is the table at the head of [`fgf_scene::xml::phase`];
+//! this module implements it.
 
 use crate::math::{sample_uniform_sphere, Frame, UNIFORM_SPHERE_PDF};
 use fgf_scene::PhaseDesc;

@@ -1,4 +1,4 @@
-//! The `fgf` medium against its closed-form equivalents (`theory.md` §3):
+//! The `fgf` medium against its closed-form equivalents (`docs/theory.md` §3):
 //! k-fBm is Davis with `α = σ_m²/(S_kf L^(2H))`, pink noise is
 //! Davis–Weinstein with `h = H+1`, `c = S_p^(1/(2H+2))/σ_m`, white noise is
 //! `homogeneous` with `σ_eff`. With the same seed the renders consume the

@@ -1,4 +1,4 @@
-//! Transport tests of the non-exponential media (`theory.md` §3–4):
+//! Transport tests of the non-exponential media (`docs/theory.md` §3–4):
 //! furnace, uncollided slab, free-flight distributions (KS), single
 //! scattering against quadrature, segment restarts at null boundaries,
 //! macro density, reciprocity.
@@ -157,7 +157,7 @@ fn furnace_returns_the_environment_radiance() {
 /// (albedo 0, environment behind): `Tr(d)` under the energy-conserving
 /// kernel, `T_ss(d)` under the reciprocal one (the same function: a segment
 /// from a surface). A null plane inside the slab (same medium on both
-/// sides) restarts the segment: `Tr(d/2)²`, not `Tr(d)` (`theory.md` §4).
+/// sides) restarts the segment: `Tr(d/2)²`, not `Tr(d)` (`docs/theory.md` §4).
 /// 7 models × 2 kernels × 2 setups × 3 channels = 84 comparisons, z = 4.5.
 #[test]
 fn slab_uncollided_transmission_is_t_ss() {
@@ -469,7 +469,7 @@ fn macro_density_uses_the_exact_optical_path() {
 /// surfaces, so under the reciprocal kernel the two values are equal; they
 /// are compared within z · SE (z = 4.5, 2 comparisons). The
 /// energy-conserving kernel's difference is printed: it is expected to
-/// exist (`theory.md` §4). Area lights (not point lights) keep the
+/// exist (`docs/theory.md` §4). Area lights (not point lights) keep the
 /// variance finite: next-event estimation towards a point light from
 /// scattering vertices near it has infinite variance.
 #[test]

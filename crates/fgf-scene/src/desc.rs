@@ -262,7 +262,7 @@ pub enum GridFilter {
     Nearest,
 }
 
-/// Which transport kernel a non-exponential medium uses (`theory.md` §4).
+/// Which transport kernel a non-exponential medium uses (`docs/theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum KernelDesc {
     /// Guo 2019 / Jarabo 2018: free flights from p = -dTr/dt, shadow rays use Tr.

@@ -26,7 +26,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "field",
         help="synthesize a fractional Gaussian field (.npy/.vol/.exr/.png)",
-        description="Synthesize one fractional Gaussian field (theory.md §1) and write it; see fgf.synthesize for the model.",
+        description="Synthesize one fractional Gaussian field (docs/theory.md §1) and write it; see fgf.synthesize for the model.",
         formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="\n\n".join(__doc__.split("\n\n")[1:]),
     )

@@ -25,7 +25,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p = sub.add_parser(
         "figures",
         help="regenerate the paper's figures with a gallery and results.json",
-        description="Regenerate the figures of Guo et al. 2019 (theory.md §5): PNGs, an HTML gallery "
+        description="Regenerate the figures of Guo et al. 2019 (docs/theory.md §5): PNGs, an HTML gallery "
         "(DIR/index.html) and every plotted number (DIR/results.json).",
     )
     p.add_argument("--out", required=True, metavar="DIR", help="output directory (created if missing)")

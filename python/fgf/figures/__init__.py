@@ -1,4 +1,4 @@
-"""Reproduce the paper's figures (Guo et al. 2019; ``theory.md`` §5) and
+"""Reproduce the paper's figures (Guo et al. 2019; ``docs/theory.md`` §5) and
 check them in numbers.
 
 ``fgf figures --out DIR [--quick]`` (or :func:`make_figures` from Python)
@@ -260,8 +260,8 @@ def gallery_html(report: dict[str, Any]) -> str:
         '<p class="meta">Made by <code>fgf figures</code>'
         + (" --quick" if report["quick"] else "")
         + f", seed {report['seed']}. Every plotted number is in "
-        '<a href="results.json">results.json</a>. Formulas: theory.md §1–4; '
-        "figure list: theory.md §5.</p>",
+        '<a href="results.json">results.json</a>. Formulas: docs/theory.md §1–4; '
+        "figure list: docs/theory.md §5.</p>",
     ]
     for name, g in report["groups"].items():
         secs = report["seconds"].get(name, 0.0)

@@ -1,4 +1,4 @@
-"""Figure group 5a, comparisons (``theory.md`` §4, §5.5), on the scene of
+"""Figure group 5a, comparisons (``docs/theory.md`` §4, §5.5), on the scene of
 group 4 (:mod:`fgf.figures.renders`).
 
 * **Kernels**: the same FGF medium (pink H = -0.1 and 2-fBm H = 1.2) under
@@ -104,7 +104,7 @@ def _kernels(ctx: Context, res: dict[str, Any]) -> Figure:
         f"The FGF media of figure 4 (pink H = −0.1, 2-fBm H = 1.2; σ_m = {SIGMA_M:g}) under the energy-conserving "
         "kernel (Guo 2019: free flights from −dTr/dt whatever the segment start) and the reciprocal kernel "
         "(Bitterli 2018: T_sm from surfaces, T_mm from medium vertices). The kernels differ by design "
-        "(theory.md §4); the difference is largest where light scatters many times. The mean relative "
+        "(docs/theory.md §4); the difference is largest where light scatters many times. The mean relative "
         "error expected from Monte Carlo noise alone is in results.json (noise_level). "
         f"{s['res']}², {s['spp']} spp, seed {seed}.",
     )
@@ -115,7 +115,7 @@ def _bitterli(ctx: Context, res: dict[str, Any]) -> Figure:
     Fgf = need("Fgf")
     rows = []
     # Pink noise = Davis–Weinstein with h = H+1, c = S_p^(1/(2H+2))/σ_m
-    # (fgf.Fgf.to_davis_weinstein, theory.md §3).
+    # (fgf.Fgf.to_davis_weinstein, docs/theory.md §3).
     hurst = -0.1
     sw = SW_RENDER
     mapped = Fgf(SIGMA_M, hurst=hurst, sw=sw).to_davis_weinstein()
@@ -157,7 +157,7 @@ def _bitterli(ctx: Context, res: dict[str, Any]) -> Figure:
         "comparison_bitterli.png",
         "The Bitterli models as FGF media",
         "Bitterli et al.'s non-exponential models with the parameters that make them equal to FGF media "
-        "(theory.md §3): Davis–Weinstein ≡ pink noise, Davis ≡ k-fBm; both rendered with the reciprocal "
+        "(docs/theory.md §3): Davis–Weinstein ≡ pink noise, Davis ≡ k-fBm; both rendered with the reciprocal "
         "kernel, the same seed. Equal models give equal images up to Monte Carlo noise (here up to "
         "floating-point rounding of the parameters, since the random streams are shared).",
     )

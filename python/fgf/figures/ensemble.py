@@ -1,5 +1,5 @@
 """Figure group 5b, uncorrelated vs correlated media: the model against
-explicit realizations (``theory.md`` §5.5), on the scene of group 4.
+explicit realizations (``docs/theory.md`` §5.5), on the scene of group 4.
 
 The ``fgf`` model render beside the mean of ``fgf.ensemble`` — explicit 3D
 realizations σ_t(x) = max(0, σ_m + σ_u(x)) with the 1D ray statistics
@@ -135,7 +135,7 @@ def _ensemble(ctx: Context, res: dict[str, Any]) -> Figure:
         f"σ_t = max(0, σ_m + σ_u) on grids of {grid} voxels along the cube, rendered classically (fgf.ensemble, "
         f"{spp_each} spp each). Pink noise with H = −0.4 (nearly uncorrelated) at low variance, α = 8 at "
         "t = 1; 1-fBm (correlated) at α = 2. The grid realizations miss part of the line-average "
-        "variance (theory.md §1, 3D-grid caveat; realized vs continuum variance in results.json) and clamping "
+        "variance (docs/theory.md §1, 3D-grid caveat; realized vs continuum variance in results.json) and clamping "
         "at 0 raises their mean extinction, so they are less transparent than the model (the structured "
         "difference) and closer to the exponential render; see docs/validation.md.",
     )

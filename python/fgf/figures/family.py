@@ -1,4 +1,4 @@
-"""Figure group 1, the FGF family (``theory.md`` §1, §5.1).
+"""Figure group 1, the FGF family (``docs/theory.md`` §1, §5.1).
 
 * 1D covariance-matrix images of pink noise and k-fBm on [0, 1].
 
@@ -46,7 +46,7 @@ Floats = Union[np.float64, npt.NDArray[np.float64]]
 
 
 def kfbm_covariance(hurst: float, sw: float, x: Floats, y: Floats) -> Floats:
-    """Covariance of the 1D k-fBm anchored at 0, for x, y > 0 (theory.md §1:
+    """Covariance of the 1D k-fBm anchored at 0, for x, y > 0 (docs/theory.md §1:
     the covariance of M minus its Taylor polynomial of degree k-1 at 0)."""
     from scipy.special import binom
 
@@ -133,7 +133,7 @@ def _covariance_images(ctx: Context, res: dict[str, Any]) -> Figure:
         "1D covariance matrices",
         "Covariance matrices on [0, 1] with S_w = 1: pink noise (H = -0.3; covariance of cell averages, "
         "since the point covariance C S_w |x-y|^(2H) is infinite on the diagonal) and anchored k-fBm "
-        "(H = 0.5, 1.5; point covariance, anchor at x = 0). Top: closed form (theory.md §1); bottom: sample "
+        "(H = 0.5, 1.5; point covariance, anchor at x = 0). Top: closed form (docs/theory.md §1); bottom: sample "
         "covariance of exact 1D realizations with the relative Frobenius error. Pink noise decorrelates "
         "quickly; k-fBm has long-range correlation that grows away from the anchor.",
     )

@@ -1,4 +1,4 @@
-"""Figure group 4, renders of one scene (``theory.md`` §5.4).
+"""Figure group 4, renders of one scene (``docs/theory.md`` §5.4).
 
 ``scenes/figures/medium_on_ground.xml``: a medium cube (side 1) on a grey
 ground plane, side lighting, low density (σ_m = 2, albedo 0.8, isotropic

@@ -1,4 +1,4 @@
-"""Figure group 3, ensemble-averaged transmittance (``theory.md`` §3, §5.3).
+"""Figure group 3, ensemble-averaged transmittance (``docs/theory.md`` §3, §5.3).
 
 * Tr(t) of the exponential, white, pink and k-fBm models (``fgf.Fgf``,
   ``fgf.Exponential``) at σ_m = 1 for several H, and for several S_w at
@@ -116,7 +116,7 @@ def _curves(ctx: Context, res: dict[str, Any]) -> Figure:
     return Figure(
         name,
         "Ensemble-averaged transmittance models",
-        "Gamma-closure transmittance Tr(t) = (1 + σ_m t/α(t))^(−α(t)) (theory.md §3) at σ_m = 1. Left: "
+        "Gamma-closure transmittance Tr(t) = (1 + σ_m t/α(t))^(−α(t)) (docs/theory.md §3) at σ_m = 1. Left: "
         "exponential, white, pink (H = −0.4, −0.1) and k-fBm (H = 0.2, 1.2; L = 1) at S_w = 1. Middle and "
         "right: S_w from 10⁻³ to 100 for pink noise (H = −0.25) and 2-fBm (H = 1.2): small S_w recovers "
         "the exponential, large S_w makes the medium transparent (heavy tail).",

@@ -1,4 +1,4 @@
-"""Figure group 2, numerical verification of var[σ̄_t] (``theory.md`` §2,
+"""Figure group 2, numerical verification of var[σ̄_t] (``docs/theory.md`` §2,
 §5.2).
 
 Three independent routes to the same number:
@@ -133,7 +133,7 @@ def _kfbm(ctx: Context, res: dict[str, Any], ax: Axes) -> None:
     lengths = np.array([0.25, 0.5, 1.0, 2.0, 4.0])
     l_dense = np.logspace(np.log10(0.2), np.log10(5.0), 40)
     for color, hurst in zip(["C3", "C4", "C5", "C6"], HURST_KFBM):
-        # The model's var[σ̄_t] for k-fBm does not depend on t (theory.md §2);
+        # The model's var[σ̄_t] for k-fBm does not depend on t (docs/theory.md §2);
         # t = 1 is an arbitrary segment length.
         closed = np.array([float(lav(hurst, SW, 1.0, length=L)) for L in l_dense])
         closed_mc = np.array([float(lav(hurst, SW, 1.0, length=L)) for L in lengths])

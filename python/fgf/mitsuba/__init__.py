@@ -1,4 +1,4 @@
-"""fgf media inside Mitsuba 3 (``theory.md`` §3–4; user guide: ``docs/mitsuba.md``).
+"""fgf media inside Mitsuba 3 (``docs/theory.md`` §3–4; user guide: ``docs/mitsuba.md``).
 
 After ``import fgf.mitsuba`` a Mitsuba 3 scene can declare the media ``fgf``
 and ``nonexponential`` (the parameters of fgf's own scene loader) and the

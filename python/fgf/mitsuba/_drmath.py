@@ -1,4 +1,4 @@
-"""Per-sample transmittance math in Dr.Jit (``theory.md`` §3–4).
+"""Per-sample transmittance math in Dr.Jit (``docs/theory.md`` §3–4).
 
 Every function works on the current Mitsuba variant's types: ``mi.Float`` or
 ``mi.Color3f`` lanes in the JIT variants, Python floats and

@@ -1,5 +1,5 @@
 """Parameters of the ``fgf`` / ``nonexponential`` media, computed once per
-render on the Python side with the fgf models (``theory.md`` §3–4).
+render on the Python side with the fgf models (``docs/theory.md`` §3–4).
 
 Nothing here runs per sample: this module validates the XML parameters (the
 same names, ranges and defaults as fgf's own scene loader), builds one
@@ -195,7 +195,7 @@ def build_models(spec: MediumSpec, default_length: Optional[float]) -> list[_tr.
 @dataclass(frozen=True)
 class Gamma:
     """The gamma-closure parameters of one channel: ``ln Tr = -σ t g(k t^e)``
-    with ``g(x) = ln(1+x)/x`` (``theory.md`` §3), and ``σ̄ = T_sm(0)``."""
+    with ``g(x) = ln(1+x)/x`` (``docs/theory.md`` §3), and ``σ̄ = T_sm(0)``."""
 
     sigma: float
     k: float

@@ -1,6 +1,6 @@
 """The ``fgf`` / ``nonexponential`` medium plugins and the ``fgf_volpath``
 integrator, built for the Mitsuba variant that is current when
-:func:`make_plugins` runs (``theory.md`` §4).
+:func:`make_plugins` runs (``docs/theory.md`` §4).
 
 Mitsuba's medium interface only samples exponential free flights and its
 ``sample_interaction`` cannot be overridden from Python, so the medium

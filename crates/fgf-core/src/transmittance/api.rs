@@ -4,7 +4,7 @@
 /// A transmittance model and its reciprocal companions, in distance units
 /// for the model's mean extinction `σ_m` (1/length): `t` is a distance, the
 /// transmittances are dimensionless, `pdf` and the `*_medium` functions are
-/// densities in 1/length. With `Tr = T_ss` (`theory.md` §4):
+/// densities in 1/length. With `Tr = T_ss` (`docs/theory.md` §4):
 ///
 /// | method | meaning |
 /// |---|---|

@@ -2,7 +2,7 @@
 //!
 //! `Tr(t) = (1 + σ_t t / α)^(-α)`, the gamma closure with a constant
 //! shape `α`. It is exactly the k-fBm regime of [`Fgf`](super::Fgf) with
-//! `α = σ_m² / (S_kf L^(2H))` (`theory.md` §3, [`Fgf::to_davis`](super::Fgf::to_davis)).
+//! `α = σ_m² / (S_kf L^(2H))` (`docs/theory.md` §3, [`Fgf::to_davis`](super::Fgf::to_davis)).
 //!
 //! ```text
 //! T_sm = σ_t (1 + σ_t t/α)^(-α-1),   σ̄ = σ_t

@@ -8,7 +8,7 @@
 //! ```
 //!
 //! It is exactly the pink-noise regime of [`Fgf`](super::Fgf) with
-//! `h = H + 1` and `c = S_p^(1/(2H+2)) / σ_m` (`theory.md` §3, checked
+//! `h = H + 1` and `c = S_p^(1/(2H+2)) / σ_m` (`docs/theory.md` §3, checked
 //! numerically in the tests; [`Fgf::to_davis_weinstein`](super::Fgf::to_davis_weinstein)).
 //! The end points are limits of the same formula: `h = 1` is Davis with
 //! `α = 1/c²`, `h = 1/2` is an exponential with `σ_eff = σ_t ln(1+c)/c`

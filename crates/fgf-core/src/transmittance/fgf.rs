@@ -4,7 +4,7 @@
 //! zero-mean fractional Gaussian field of Hurst parameter `H` and
 //! white-noise strength `S_w`. The line average `σ̄_t` over a segment of
 //! length `t` is replaced by a gamma variable with mean `σ_m` and variance
-//! `v(t) = var[σ̄_t]` (`theory.md` §2–3):
+//! `v(t) = var[σ̄_t]` (`docs/theory.md` §2–3):
 //!
 //! ```text
 //! α(t) = σ_m² / v(t),   Tr(t) = (1 + σ_m t/α)^(-α) = exp(-α log1p(σ_m t/α))
@@ -145,7 +145,7 @@ impl Fgf {
     }
 
     /// The equal [`Davis`] model of a k-fBm medium, `α = σ_m²/(S_kf L^(2H))`
-    /// (`theory.md` §3). Errors for white/pink noise, or when `α` over- or
+    /// (`docs/theory.md` §3). Errors for white/pink noise, or when `α` over- or
     /// underflows `f64`.
     pub fn to_davis(&self) -> Result<Davis> {
         match self.regime {
@@ -160,7 +160,7 @@ impl Fgf {
     }
 
     /// The equal [`DavisWeinstein`] model of a white or pink medium,
-    /// `h = H + 1`, `c = S_p^(1/(2H+2)) / σ_m` (`theory.md` §3; at
+    /// `h = H + 1`, `c = S_p^(1/(2H+2)) / σ_m` (`docs/theory.md` §3; at
     /// `H = -1/2`, `S_p = S_w`). Errors for k-fBm.
     pub fn to_davis_weinstein(&self) -> Result<DavisWeinstein> {
         match self.regime {

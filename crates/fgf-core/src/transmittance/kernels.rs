@@ -1,4 +1,4 @@
-//! Numeric kernels of the gamma closure (`theory.md` §7): a fast `ln(1+x)`,
+//! Numeric kernels of the gamma closure (`docs/theory.md` §7): a fast `ln(1+x)`,
 //! `g(x) = ln(1+x)/x` with its two cancellation-free companions `g - 1` and
 //! `x (-g'(x))`, and the terms of the pink-noise surface equation. Plain
 //! functions of `f64`, no model state.

@@ -1,4 +1,4 @@
-//! Non-exponential transmittance models (`theory.md` §3–4).
+//! Non-exponential transmittance models (`docs/theory.md` §3–4).
 //!
 //! Four models, one file each: [`Exponential`], [`Fgf`] (the gamma closure
 //! of Guo et al. 2019: white, pink, k-fBm), [`Davis`] and [`DavisWeinstein`]
@@ -25,7 +25,7 @@
 //! Everything is in **distance units** for a given mean extinction
 //! `sigma_t = σ_m` (1/length): `t` is a distance, `tr(t)` is dimensionless,
 //! `pdf(t)` and the `*_medium` functions are densities in 1/length
-//! (`theory.md` §4 for the reciprocal functions `T_ss`, `T_sm`, `T_ms`,
+//! (`docs/theory.md` §4 for the reciprocal functions `T_ss`, `T_sm`, `T_ms`,
 //! `T_mm`).
 //!
 //! Domain: `t ≥ 0` including `t = +inf` (`tr = pdf = T_ms = T_mm = 0`);

@@ -1,4 +1,4 @@
-//! The root finder of the pink-noise samplers (`theory.md` §7): a
+//! The root finder of the pink-noise samplers (`docs/theory.md` §7): a
 //! safeguarded Newton/Halley/Householder iteration on `s = ln t` for an
 //! increasing function, with bisection as the fallback inside the bracket,
 //! and the tolerances the samplers stop at.

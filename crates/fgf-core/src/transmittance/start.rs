@@ -1,4 +1,4 @@
-//! Fitted starting points of the pink-noise samplers (`theory.md` §7):
+//! Fitted starting points of the pink-noise samplers (`docs/theory.md` §7):
 //! Chebyshev interpolants of the root, made once per model at construction
 //! and evaluated by Estrin's scheme, so that a typical sample needs a single
 //! evaluation of its equation. They only move the start of the safeguarded

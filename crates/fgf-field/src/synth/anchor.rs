@@ -1,4 +1,4 @@
-//! Anchoring of a k-fBm (`theory.md` §1, "Synthesis of k-fBm"): the
+//! Anchoring of a k-fBm (`docs/theory.md` §1, "Synthesis of k-fBm"): the
 //! derivatives of the periodic field at the anchor, summed from its
 //! spectrum, and the Taylor polynomial they define, which the last pass
 //! subtracts.

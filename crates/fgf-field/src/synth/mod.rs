@@ -1,5 +1,5 @@
 //! Spectral synthesis of fractional Gaussian fields on regular grids
-//! (`theory.md` §1, "Synthesis on a grid" and "Synthesis of k-fBm").
+//! (`docs/theory.md` §1, "Synthesis on a grid" and "Synthesis of k-fBm").
 //!
 //! Algorithm, in the order the code runs it (see the crate docs for the
 //! conventions):
@@ -188,7 +188,7 @@ pub struct Field {
 }
 
 /// The `S_w` a 3D field needs so that its restriction to any line has the
-/// covariance of the 1D model with `sw_1d` (`theory.md` §1, caveat for 3D
+/// covariance of the 1D model with `sw_1d` (`docs/theory.md` §1, caveat for 3D
 /// grids): `S_w3 = S_w · 2π(2H+1)`, from `C(H,3) = C(H,1) / (2π(2H+1))`.
 /// Valid for `H > -1/2` (the rendering range).
 ///

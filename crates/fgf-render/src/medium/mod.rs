@@ -21,31 +21,22 @@
 //!   and ends on `end` (a light or a surface crossing is a `Surface` end).
 //!
 //! Classical (exponential) media ignore `start`/`end`: their transmittance
-//! is multiplicative. Non-exponential media (`theory.md` §4) use
+//! is multiplicative. Non-exponential media (`docs/theory.md` §4) use
 //! them to choose between the kernels: energy-conserving (free flights from
 //! `pdf = -dTr/dt`, shadow rays `Tr`) or reciprocal (free flights from
 //! `T_sm` after a `Surface` start and `T_mm` after a `Medium` start; shadow
 //! rays `T_ss` or `T_ms`). They add a variant to [`Medium`] and one arm to
 //! each `match` below; the integrator needs no change.
 //!
-//! # Media (user documentation)
+//! # Media
 //!
-//! | XML | parameters | notes |
-//! |---|---|---|
-//! | `homogeneous` | `sigma_t` (1/length, float or rgb, default 1), `albedo` (float or rgb in \[0, 1\], default 0.75), `scale` (default 1), `phase` | analytic free flights, one-sample MIS over the RGB channels |
-//! | `heterogeneous` | `sigma_t` and `albedo` as `gridvolume` or constants, `scale`, `phase` | delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA |
-//! | `fgf`, `nonexponential` | `sigma_t`, `albedo`, `scale`, `phase`; `hurst`, `sw`, `length` (fgf) or `transmittance` with `alpha` / `h`, `c`; `kernel`; optional `density` gridvolume | non-exponential transmittance (`theory.md` §3–4): see [`nonexp`] |
+//! The user documentation (parameters, units, ranges, defaults, an XML and
+//! a Python example) is the table at the head of [`fgf_scene::xml::media`];
+//! the notes here are about the implementation.
 //!
-//! ```xml
-//! <shape type="cube">
-//!     <bsdf type="null"/>
-//!     <medium type="homogeneous" name="interior">
-//!         <rgb name="sigma_t" value="1, 2, 4"/>
-//!         <float name="albedo" value="0.9"/>
-//!         <phase type="hg"><float name="g" value="0.3"/></phase>
-//!     </medium>
-//! </shape>
-//! ```
+//! * `homogeneous`: analytic free flights, one-sample MIS over the RGB channels
+//! * `heterogeneous`: delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA
+//! * `fgf`, `nonexponential`: non-exponential transmittance (`docs/theory.md` §3–4): see [`nonexp`]
 
 pub mod dda;
 pub mod flight_table;
@@ -60,7 +51,7 @@ use crate::ray::Ray;
 use crate::spectrum::{from_rgb, Spectrum};
 use fgf_scene::{MediumDesc, VolumeDesc};
 
-/// How the current free-flight segment started (`theory.md` §4).
+/// How the current free-flight segment started (`docs/theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum SegmentStart {
     /// The camera, a light, or any surface crossing (including null boundaries).

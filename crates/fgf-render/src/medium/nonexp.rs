@@ -1,57 +1,22 @@
 //! Non-exponential media: the `fgf` and `nonexponential` plugins
-//! (`theory.md` §3–4).
+//! (`docs/theory.md` §3–4).
 //!
-//! # User documentation
+//! # Overview
 //!
 //! Both plugins are usable wherever `homogeneous` is (shape `interior` /
 //! `exterior`, the sensor's medium). The extinction along a ray is a random
 //! field with mean `σ_m`; its ensemble-averaged transmittance `Tr(t)` is not
-//! exponential. The loader (`fgf_scene::xml::nonexp`) validates the parameters
-//! and documents each in its parameter table; this is the summary.
-//!
-//! | parameter | plugin | units | range | default |
-//! |---|---|---|---|---|
-//! | `sigma_t` (float or rgb), `scale` | both | 1/length | `> 0` per channel | 1, 1 |
-//! | `albedo` (float or rgb) | both | – | `[0, 1]` | 0.75 |
-//! | `hurst` | `fgf` | – | `-0.5` white, `(-0.5, 0)` pink, `(k-1, k)` non-integer k-fBm | required |
-//! | `sw` | `fgf` | length^-(2H+2) | `> 0` | required |
-//! | `length` | `fgf`, k-fBm only | length | `> 0` | diagonal of the bounding box of the shapes it is the interior of |
-//! | `transmittance` | `nonexponential` | – | `exponential`, `davis` (`alpha > 0`), `davis_weinstein` (`h ∈ [0.5,1]`, `c > 0`) | required |
-//! | `kernel` | both | – | `energy_conserving`, `reciprocal` | `energy_conserving` |
-//! | `density` (nested 1-channel `gridvolume`) | both | – | values `≥ 0` | none: `ρ = 1` |
-//! | nested `phase` | both | – | `isotropic`, `hg` | isotropic |
-//!
-//! ```xml
-//! <shape type="cube">
-//!     <bsdf type="null"/>
-//!     <medium type="fgf" name="interior">
-//!         <float  name="sigma_t" value="4.0"/>
-//!         <rgb    name="albedo"  value="0.8"/>
-//!         <float  name="hurst"   value="-0.1"/>   <!-- pink noise -->
-//!         <float  name="sw"      value="4.0"/>
-//!         <string name="kernel"  value="reciprocal"/>
-//!     </medium>
-//! </shape>
-//! <!-- the Bitterli 2018 models, for comparisons -->
-//! <medium type="nonexponential" name="interior">
-//!     <string name="transmittance" value="davis"/>
-//!     <float  name="alpha" value="2.5"/>
-//!     <float  name="sigma_t" value="4.0"/>
-//! </medium>
-//! ```
-//!
-//! ```python
-//! import fgf
-//! img = fgf.render("scenes/fgf-cube-pink.xml", spp=64, seed=0)      # the model
-//! mean, se = fgf.ensemble("scenes/fgf-cube-pink.xml", realizations=16)  # ground truth
-//! ```
+//! exponential. The user documentation (parameters, units, ranges, defaults,
+//! an XML and a Python example) is the table at the head of
+//! [`fgf_scene::xml::nonexp`], and `SceneDesc::validate` checks the
+//! parameters; this module implements the media.
 //!
 //! # Transport
 //!
 //! Each RGB channel `c` has its own model `M_c` built with mean extinction
 //! `σ_c` (the same `hurst`, `sw`, `length`, `alpha`, `h`, `c` for all
 //! channels). With a macro density `ρ(x)` the models are evaluated on the
-//! equivalent distance `s(t) = ∫_0^t ρ = τ_m(t)/σ_m` (`t_eq` of `theory.md`
+//! equivalent distance `s(t) = ∫_0^t ρ = τ_m(t)/σ_m` (`t_eq` of `docs/theory.md`
 //! §4); without one `s = t`.
 //!
 //! * Free flights draw `s` from one channel's flight distribution and

@@ -4,14 +4,14 @@
 //!
 //! * `fgf`: extinction `σ_t(x) = σ_m + σ_u(x)`, where `σ_u` is a zero-mean
 //!   fractional Gaussian field of Hurst parameter `H` and white-noise
-//!   strength `S_w` (`theory.md` §1–2). The renderer uses its
+//!   strength `S_w` (`docs/theory.md` §1–2). The renderer uses its
 //!   ensemble-averaged, non-exponential transmittance, the gamma closure of
-//!   `theory.md` §3, with the transport kernel chosen by `kernel`
-//!   (`theory.md` §4).
+//!   `docs/theory.md` §3, with the transport kernel chosen by `kernel`
+//!   (`docs/theory.md` §4).
 //! * `nonexponential`: a named transmittance model of optical depth
 //!   `τ = σ_m t`: `exponential`, `exp(−τ)`; `davis`, the Davis power law
-//!   `(1 + τ/α)^(−α)` (`theory.md` §3, the form of k-fBm); or
-//!   `davis_weinstein` (Bitterli 2018; `theory.md` §3, the form of pink
+//!   `(1 + τ/α)^(−α)` (`docs/theory.md` §3, the form of k-fBm); or
+//!   `davis_weinstein` (Bitterli 2018; `docs/theory.md` §3, the form of pink
 //!   noise with `h = H + 1`).
 //!
 //! The model parameters are those of `fgf_core::transmittance` (`Fgf`,
@@ -25,7 +25,7 @@
 //! | both | `scale` | float | – | > 0 | 1 | multiplies `sigma_t` |
 //! | both | `kernel` | string | – | `energy_conserving` (Guo 2019 / Jarabo 2018), `reciprocal` (Bitterli 2018) | `energy_conserving` | transport kernel |
 //! | both | nested `phase` | – | – | one, see [`super::phase`] | isotropic | |
-//! | both | nested `volume name="density"` | `gridvolume` | – | 1 channel, values ≥ 0 | none (`ρ = 1`) | macro-scale density `ρ(x)`: `σ_m(x) = σ_m ρ(x)` (`theory.md` §4); see [`super::volumes`] |
+//! | both | nested `volume name="density"` | `gridvolume` | – | 1 channel, values ≥ 0 | none (`ρ = 1`) | macro-scale density `ρ(x)`: `σ_m(x) = σ_m ρ(x)` (`docs/theory.md` §4); see [`super::volumes`] |
 //! | `fgf` | `hurst` | float | – | −0.5 (white noise), (−0.5, 0) (pink noise), or (0, 1000) not an integer (k-fBm, `k = ⌈H⌉`) | required | Hurst parameter `H` |
 //! | `fgf` | `sw` | float | length^(−2H−2) (so that `var[σ̄_t]` is in 1/length²) | > 0 | required | white-noise strength `S_w` |
 //! | `fgf` | `length` | float | length | > 0; k-fBm only (an error for white and pink noise) | the diagonal of the bounding box of the shapes that have the medium as `interior` | characteristic length `L`: `var[σ̄_t] = S_kf L^(2H)` |
