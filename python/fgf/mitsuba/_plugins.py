@@ -6,7 +6,7 @@ Mitsuba's medium interface only samples exponential free flights and its
 ``sample_interaction`` cannot be overridden from Python, so the medium
 plugins here only carry their parameters; ``fgf_volpath`` does the free-flight
 sampling itself, with the semantics of fgf's renderer
-(``crates/fgf-render/src/integrator.rs`` and ``medium/``):
+(``crates/fgf-render/src/integrator/`` and ``medium/``):
 
 * a path is cut into segments; a segment starts "on a surface" at the camera,
   at a light and at **every** surface crossing (null boundaries included),
