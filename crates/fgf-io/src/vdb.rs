@@ -1414,6 +1414,94 @@ mod tests {
         b
     }
 
+    /// Written by the reference implementation (OpenVDB 10.0.1, Debian's
+    /// python3-openvdb) with its defaults (Blosc LZ4 + byte shuffle, active
+    /// mask compression), by this script under /usr/bin/python3:
+    ///
+    /// ```python
+    /// import numpy as np, pyopenvdb as vdb
+    /// g = vdb.FloatGrid(); g.name = "density"; g.gridClass = vdb.GridClass.FOG_VOLUME
+    /// i, j, k = np.meshgrid(np.arange(12), np.arange(5), np.arange(9), indexing="ij")
+    /// g.copyFromArray(((i + 2*j + 3*k) * 0.125 + 0.5).astype(np.float32), ijk=(-3, 4, 10), tolerance=0.0)
+    /// g.fill((16, 0, 8), (23, 7, 15), 0.75, active=True)
+    /// g.transform = vdb.createLinearTransform([[0, .5, 0, 0], [-.5, 0, 0, 0], [0, 0, .5, 0], [1, 2, 3, 1]])
+    /// h = vdb.Vec3SGrid(); h.name = "vel"
+    /// vdb.write("reference_blosc.vdb", grids=[g, h])
+    /// ```
+    const REFERENCE: &[u8] = include_bytes!("../tests/data/reference_blosc.vdb");
+
+    #[test]
+    fn reads_the_reference_implementations_blosc_file() {
+        let p = Path::new("reference_blosc.vdb");
+        let g = parse_float_grid(p, REFERENCE, "density").unwrap();
+        assert_eq!(g.index_min, [-3, 0, 8]);
+        assert_eq!(g.dims, [27, 9, 11]);
+        let mut n_active = 0;
+        for z in 0..11 {
+            for y in 0..9 {
+                for x in 0..27 {
+                    let (i, j, k) = (x as i32 - 3, y as i32, z as i32 + 8);
+                    let want = if (-3..9).contains(&i)
+                        && (4..9).contains(&j)
+                        && (10..19).contains(&k)
+                    {
+                        ((i + 3) + 2 * (j - 4) + 3 * (k - 10)) as f32 * 0.125 + 0.5
+                    } else if (16..24).contains(&i) && (0..8).contains(&j) && (8..16).contains(&k) {
+                        0.75 // an active tile of the lower internal node
+                    } else {
+                        0.0
+                    };
+                    assert_eq!(g.at(x, y, z), want, "voxel {:?}", (i, j, k));
+                    n_active += (want != 0.0) as usize;
+                }
+            }
+        }
+        assert_eq!(n_active, 1052);
+        let m = g.index_to_world;
+        assert_eq!(m[0], [0.0, -0.5, 0.0, 1.0]);
+        assert_eq!(m[1], [0.5, 0.0, 0.0, 2.0]);
+        assert_eq!(m[2], [0.0, 0.0, 0.5, 3.0]);
+        assert_eq!(g.world_bbox(), None);
+        let e = parse_float_grid(p, REFERENCE, "vel")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("has type Tree_vec3s_5_4_3; only float grids"),
+            "{e}"
+        );
+        assert_eq!(
+            list_grids(p, REFERENCE).unwrap(),
+            vec![
+                ("density".to_string(), "Tree_float_5_4_3".to_string()),
+                ("vel".to_string(), "Tree_vec3s_5_4_3".to_string())
+            ]
+        );
+    }
+
+    #[test]
+    fn hostile_blosc_bytes_give_errors_not_panics() {
+        let p = Path::new("bad.vdb");
+        // The file is complete for "density" once its grid has ended.
+        let (mut r, _) = read_header(REFERENCE).unwrap();
+        let end = read_descriptor(&mut r).unwrap().end_pos as usize;
+        assert!(end < REFERENCE.len());
+        for n in (0..end).step_by(7) {
+            assert!(parse_float_grid(p, &REFERENCE[..n], "density").is_err());
+        }
+        // Every byte of the header, descriptors, metadata and transform;
+        // every 5th of the tree (masks, metadata bytes, Blosc headers).
+        let positions = (0..1024).chain((1024..end).step_by(5));
+        for i in positions {
+            for v in [0xffu8, 0x00] {
+                let mut b = REFERENCE.to_vec();
+                b[i] = v;
+                if let Err(e) = parse_float_grid(p, &b, "density") {
+                    assert!(e.to_string().starts_with("bad.vdb: "));
+                }
+            }
+        }
+    }
+
     #[test]
     fn half_floats_decode() {
         assert_eq!(f16_to_f32(0x3c00), 1.0);
