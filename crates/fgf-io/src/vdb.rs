@@ -76,9 +76,9 @@ impl VdbGrid {
     /// with this as its `to_world` samples at the same world points.
     pub fn unit_cube_to_world(&self) -> [[f64; 4]; 4] {
         let mut box_map = [[0.0; 4]; 4];
-        for a in 0..3 {
-            box_map[a][a] = self.dims[a] as f64;
-            box_map[a][3] = self.index_min[a] as f64 - 0.5;
+        for (a, row) in box_map.iter_mut().enumerate().take(3) {
+            row[a] = self.dims[a] as f64;
+            row[3] = self.index_min[a] as f64 - 0.5;
         }
         box_map[3][3] = 1.0;
         mat_mul(&self.index_to_world, &box_map)
@@ -179,7 +179,8 @@ pub fn encode_float_grid(
     }
 
     // Leaves: origin -> (value mask, 512 values in VDB order x-major).
-    let mut leaves: BTreeMap<[i32; 3], ([u64; 8], Box<[f32; 512]>)> = BTreeMap::new();
+    type Leaf = ([u64; 8], Box<[f32; 512]>);
+    let mut leaves: BTreeMap<[i32; 3], Leaf> = BTreeMap::new();
     let leaf_n = |n: usize| n.div_ceil(8);
     let mut n_active: u64 = 0;
     for lx in 0..leaf_n(nx) {
@@ -814,7 +815,8 @@ impl Codec {
                         blosc_decompress(chunk, &mut buf).map_err(|m| {
                             format!("corrupt Blosc chunk at offset {}: {m}", r.pos - chunk.len())
                         })?;
-                        return Ok(decode_values(&buf, self.half, out));
+                        decode_values(&buf, self.half, out);
+                    return Ok(());
                     }
                     let mut z = flate2::Decompress::new(true);
                     match z.decompress(chunk, &mut buf, flate2::FlushDecompress::Finish) {
