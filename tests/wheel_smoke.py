@@ -63,6 +63,15 @@ def main() -> int:
         np.testing.assert_allclose(img[0, 0], 1.0, rtol=0.01)
         assert img[2:6, 2:6].mean() < 0.9, img[2:6, 2:6].mean()
 
+    # The wheel's metadata declares the extras.
+    from importlib.metadata import metadata
+
+    md = metadata("fgf")
+    extras = set(md.get_all("Provides-Extra") or [])
+    assert {"cluster", "mitsuba", "vdb"} <= extras, extras
+    requires = " ".join(md.get_all("Requires-Dist") or [])
+    assert "dask[distributed]" in requires and "mitsuba==3.9.1" in requires and "tinyvdb" in requires, requires
+
     # The `fgf` console script of the venv prints the package version.
     exe = os.path.join(os.path.dirname(sys.executable), "fgf")
     out = subprocess.run([exe, "--version"], capture_output=True, text=True, check=True).stdout.strip()
