@@ -105,6 +105,21 @@ impl VdbGrid {
         Some(b)
     }
 
+    /// The grid as a 1-channel `.vol` grid spanning the unit cube (bounding
+    /// box `[0,1]³`, data unchanged) and the map that places that cube in
+    /// world space ([`unit_cube_to_world`](Self::unit_cube_to_world)): what a
+    /// `gridvolume` needs, composed after its own `to_world` (`docs/vdb.md`).
+    pub fn into_unit_cube_vol(self) -> (crate::vol::VolGrid, [[f64; 4]; 4]) {
+        let m = self.unit_cube_to_world();
+        let grid = crate::vol::VolGrid {
+            shape: self.dims,
+            channels: 1,
+            bbox: [0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            data: self.data,
+        };
+        (grid, m)
+    }
+
     /// Value at dense voxel `(x, y, z)` (relative to `index_min`).
     #[inline]
     pub fn at(&self, x: usize, y: usize, z: usize) -> f32 {
@@ -816,7 +831,7 @@ impl Codec {
                             format!("corrupt Blosc chunk at offset {}: {m}", r.pos - chunk.len())
                         })?;
                         decode_values(&buf, self.half, out);
-                    return Ok(());
+                        return Ok(());
                     }
                     let mut z = flate2::Decompress::new(true);
                     match z.decompress(chunk, &mut buf, flate2::FlushDecompress::Finish) {
@@ -1305,6 +1320,21 @@ mod tests {
         assert_eq!(g.background, 0.0);
         assert_eq!(g.world_bbox().unwrap(), [1.0, -2.0, 3.0, 7.5, 2.5, 13.0]);
         assert_eq!(g.index_to_world[0][3], 1.25);
+        // As a unit-cube .vol grid: voxel (x, y, z) centred at (idx + 0.5)/n
+        // in the cube lands on the VDB voxel centre origin + (idx + 0.5) s.
+        let (vol, m) = g.clone().into_unit_cube_vol();
+        assert_eq!(vol.shape, dims);
+        assert_eq!(vol.at(3, 4, 5, 0), g.at(3, 4, 5));
+        let u = [3.5 / 13.0, 4.5 / 9.0, 5.5 / 20.0];
+        let w: Vec<f64> = (0..3)
+            .map(|r| (0..3).map(|c| m[r][c] * u[c]).sum::<f64>() + m[r][3])
+            .collect();
+        for (k, want) in [1.0 + 3.5 * 0.5, -2.0 + 4.5 * 0.5, 3.0 + 5.5 * 0.5]
+            .into_iter()
+            .enumerate()
+        {
+            assert!((w[k] - want).abs() < 1e-12, "{w:?}");
+        }
     }
 
     #[test]
