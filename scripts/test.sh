@@ -14,6 +14,8 @@ echo "== cargo test (workspace)"
 cargo test --workspace --exclude fgf-py --release
 echo "== pytest (fast)"
 python -m pytest -q -m "not slow"
+echo "== wheel: portable build, fresh venv, smoke test"
+bash scripts/wheel_smoke.sh
 echo "== slow statistical tests"
 cargo test --workspace --exclude fgf-py --release -- --ignored
 python -m pytest -q -m slow

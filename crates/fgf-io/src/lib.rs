@@ -3,12 +3,14 @@
 //! File formats shared by the field synthesis and the renderer:
 //!
 //! * [`vol`]: Mitsuba 3 `.vol` grids (read and write; layout in `formats.md`).
+//! * [`vdb`]: OpenVDB float grids (write one, read one densely; `docs/vdb.md`).
 //! * [`image`]: linear float32 RGB/greyscale EXR (scanlines) and 8-bit PNG.
 //! * [`atomic_write`]: every writer goes through a temporary file in the
 //!   target directory and a rename, so a failed or interrupted write never
 //!   leaves a half-written file and never clobbers the user's old file.
 
 pub mod image;
+pub mod vdb;
 pub mod vol;
 
 use std::io::Write;

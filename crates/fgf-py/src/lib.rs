@@ -12,6 +12,7 @@ mod field;
 mod progress;
 mod render;
 mod transmittance;
+mod vdb;
 
 pub use errors::{FgfError, ParameterError, SceneError};
 
@@ -26,5 +27,6 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     field::register(m)?;
     render::register(m)?;
     ensemble::register(m)?;
+    vdb::register(m)?;
     Ok(())
 }
