@@ -45,9 +45,7 @@ fn run<R: Send>(
     progress: Option<&Bound<'_, PyAny>>,
     job: impl FnOnce(&dyn fgf_core::Progress) -> R + Send,
 ) -> PyResult<R> {
-    let quiet = progress.map_or(true, |p| {
-        p.is_none() || p.extract::<bool>().is_ok_and(|b| !b)
-    });
+    let quiet = progress.is_none_or(|p| p.is_none() || p.extract::<bool>().is_ok_and(|b| !b));
     if quiet && size < SMALL_JOB {
         return Ok(py.detach(|| job(&fgf_core::NoProgress)));
     }

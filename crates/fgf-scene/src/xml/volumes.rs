@@ -7,12 +7,24 @@
 //!
 //! | plugin | parameter | type | units | range | default | meaning |
 //! |---|---|---|---|---|---|---|
-//! | `gridvolume` | `filename` | string | – | a `.vol` file of 1 or 3 channels (1 for `density`), relative to the scene file, at most 4 GiB | required | |
+//! | `gridvolume` | `filename` | string | – | a `.vol` file of 1 or 3 channels (1 for `density`), or an OpenVDB `.vdb` file (an fgf extension, below), relative to the scene file, at most 4 GiB | required | |
+//! | `gridvolume` | `grid` | string | – | the name of a float grid in the `.vdb` file (only with a `.vdb` file) | `density` | which grid of the file to use |
 //! | `gridvolume` | `to_world` | transform | – | invertible | identity | volume space to world |
 //! | `gridvolume` | `use_grid_bbox` | boolean | – | – | false | false: the grid spans the unit cube `[0, 1]³` of volume space; true: the bounding box in the file (which must not be empty) |
 //! | `gridvolume` | `filter_type` | string | – | `trilinear`, `nearest` | `trilinear` | interpolation between voxel centres |
 //! | `gridvolume` | `wrap_mode` | string | – | `clamp` | `clamp` | the other Mitsuba modes are not supported |
 //! | `constvolume` | `value` | float or rgb | that of the parameter | that of the parameter | 1 | |
+//!
+//! **OpenVDB files (an fgf extension; Mitsuba 3 reads only `.vol`).** A
+//! `filename` ending in `.vdb` loads the float grid named `grid` densely over
+//! its active bounding box (`fgf_io::vdb`). The file's index-to-world
+//! transform places it: voxel `(i, j, k)` is centred at
+//! `to_world · index_to_world · (i, j, k)`, so `to_world` (default identity)
+//! maps the VDB's world space into the scene, and outside the active box the
+//! medium is empty (the sparse background, which must be 0). `use_grid_bbox`
+//! does not apply. Fields made by `fgf field -o f.vdb` (or `fgf.write_vdb`)
+//! cover the same box as `-o f.vol` with `use_grid_bbox`; conventions in
+//! `docs/vdb.md`.
 //!
 //! ```xml
 //! <volume type="gridvolume" name="sigma_t">
@@ -36,7 +48,7 @@ use super::props::{check_rgb, Entry, Props};
 use crate::desc::*;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::validate::Range;
-use glam::Mat4;
+use glam::{DMat4, Mat4};
 use std::sync::Arc;
 
 /// `.vol` files larger than this (4 GiB) are refused before reading.
@@ -96,6 +108,7 @@ pub(crate) fn gridvolume(
             "filter_type",
             "use_grid_bbox",
             "wrap_mode",
+            "grid",
         ],
     )?;
     let (file, fnode) = p.string("filename")?.ok_or_else(|| {
@@ -119,14 +132,42 @@ pub(crate) fn gridvolume(
             ),
         ));
     }
-    check_vol_size(fnode, &path, size)?;
-    let grid = fgf_io::vol::read_vol(&path).map_err(|e| {
+    let io_err = |e: fgf_io::IoError| {
         let kind = match e {
             fgf_io::IoError::Io { .. } => SceneErrorKind::Io,
             fgf_io::IoError::Format { .. } => SceneErrorKind::Format,
         };
         fnode.err_kind(kind, format!("cannot load grid: {e}"))
-    })?;
+    };
+    let is_vdb = file.to_ascii_lowercase().ends_with(".vdb");
+    let grid_name = p.string("grid")?;
+    // A `.vdb` grid arrives on the unit cube with the map that places the
+    // cube where the file's own index-to-world transform puts its voxels
+    // (docs/vdb.md); `to_world` is composed after it.
+    let (grid, vdb_to_volume) = if is_vdb {
+        let name = grid_name.map_or("density", |(g, _)| g);
+        let vdb = fgf_io::vdb::read_float_grid(&path, name).map_err(io_err)?;
+        if vdb.background != 0.0 {
+            return Err(fnode.err_kind(
+                SceneErrorKind::Format,
+                format!(
+                    "grid '{name}' of '{}' has background {}; a medium needs background 0 (it would fill all of space)",
+                    path.display(),
+                    vdb.background
+                ),
+            ));
+        }
+        let (g, m) = vdb.into_unit_cube_vol();
+        (g, Some(DMat4::from_cols_array_2d(&m).transpose()))
+    } else {
+        if let Some((_, node)) = grid_name {
+            return Err(
+                node.err("'grid' selects a grid of a .vdb file; this gridvolume reads a .vol file")
+            );
+        }
+        check_vol_size(fnode, &path, size)?;
+        (fgf_io::vol::read_vol(&path).map_err(io_err)?, None)
+    };
     if grid.channels == 6 {
         return Err(fnode.err_kind(
             SceneErrorKind::Format,
@@ -147,9 +188,11 @@ pub(crate) fn gridvolume(
             ),
         ));
     }
-    let to_world = match p.transform("to_world")? {
-        Some((m, node)) => to_invertible_mat4(node, m)?,
-        None => Mat4::IDENTITY,
+    let to_world = match (p.transform("to_world")?, vdb_to_volume) {
+        (Some((m, node)), None) => to_invertible_mat4(node, m)?,
+        (Some((m, node)), Some(v)) => to_invertible_mat4(node, m * v)?,
+        (None, Some(v)) => to_invertible_mat4(fnode, v)?,
+        (None, None) => Mat4::IDENTITY,
     };
     let filter = match p
         .choice("filter_type", "trilinear", &["trilinear", "nearest"])?
@@ -159,6 +202,11 @@ pub(crate) fn gridvolume(
         _ => GridFilter::Trilinear,
     };
     let use_grid_bbox = p.bool_or("use_grid_bbox", false)?;
+    if use_grid_bbox && is_vdb {
+        return Err(fnode.err(
+            "use_grid_bbox does not apply to a .vdb file: its own transform places the grid",
+        ));
+    }
     if use_grid_bbox {
         let b = grid.bbox;
         if !(b[3] > b[0] && b[4] > b[1] && b[5] > b[2]) {
