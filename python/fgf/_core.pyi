@@ -37,6 +37,8 @@ __all__ = [
     "radial_power_spectrum",
     "line_average_second_moment",
     "write_field",
+    "write_vdb",
+    "read_vdb",
     "render_scene",
     "write_exr",
     "write_png",
@@ -213,3 +215,12 @@ def ensemble_scene(
     progress: _Progress = None,
 ) -> tuple[_F32Array, _F32Array, dict[str, Any], bool]:
     """Ensemble of explicit realizations: ``(mean, stderr, info, interrupted)``, images ``(H, W, 3)`` float32."""
+
+# --- io: OpenVDB ---
+def write_vdb(
+    path: str, data: npt.NDArray[np.float32], voxel_size: tuple[float, float, float],
+    origin: tuple[float, float, float], name: str,
+) -> None: ...
+def read_vdb(
+    path: str, grid: str,
+) -> tuple[npt.NDArray[np.float32], tuple[int, int, int], list[list[float]], float]: ...

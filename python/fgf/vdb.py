@@ -27,6 +27,7 @@ Examples
 from __future__ import annotations
 
 import os
+import typing
 from dataclasses import dataclass
 from typing import Optional, Sequence, Tuple, Union
 
@@ -43,13 +44,17 @@ Vec3 = Tuple[float, float, float]
 def _vec3(name: str, v: Union[float, Sequence[float]], positive: bool) -> Vec3:
     from . import ParameterError
 
-    t = (float(v),) * 3 if np.ndim(v) == 0 else tuple(float(c) for c in v)  # type: ignore[arg-type]
+    try:
+        a = np.asarray(v, dtype=float)
+    except (TypeError, ValueError):
+        raise ParameterError(f"invalid {name} = {v!r}: give one number or three (x, y, z)") from None
+    t: tuple[float, ...] = (float(a),) * 3 if a.ndim == 0 else tuple(float(c) for c in a.ravel())
     if len(t) != 3:
         raise ParameterError(f"invalid {name} = {v!r}: give one number or three (x, y, z)")
     for c in t:
         if not np.isfinite(c) or (positive and c <= 0):
             raise ParameterError(f"invalid {name} = {v!r}: {'each must be finite and > 0' if positive else 'must be finite'}")
-    return t  # type: ignore[return-value]
+    return (t[0], t[1], t[2])
 
 
 def _grid3(array: np.ndarray) -> np.ndarray:
@@ -68,7 +73,7 @@ def _grid3(array: np.ndarray) -> np.ndarray:
 
 
 def write_vdb(
-    path: Union[str, os.PathLike],
+    path: Union[str, os.PathLike[str]],
     array: np.ndarray,
     spacing: Union[float, Sequence[float]] = 1.0,
     origin: Sequence[float] = (0.0, 0.0, 0.0),
@@ -124,7 +129,7 @@ class VdbGrid:
         return tuple(float(v) for v in np.minimum(a, b)), tuple(float(v) for v in np.maximum(a, b))  # type: ignore[return-value]
 
 
-def read_vdb(path: Union[str, os.PathLike], grid: str = "density") -> VdbGrid:
+def read_vdb(path: Union[str, os.PathLike[str]], grid: str = "density") -> VdbGrid:
     """Read float grid ``grid`` of an OpenVDB file densely over its active box.
 
     Reads uncompressed and zip-compressed files (with or without active-mask
@@ -133,11 +138,12 @@ def read_vdb(path: Union[str, os.PathLike], grid: str = "density") -> VdbGrid:
     with a one-line message naming the file.
     """
     data, index_min, m, bg = _core.read_vdb(os.fspath(path), str(grid))
-    return VdbGrid(np.asarray(data), str(grid), tuple(index_min), np.array(m, dtype=float), float(bg))  # type: ignore[arg-type]
+    i0 = (int(index_min[0]), int(index_min[1]), int(index_min[2]))
+    return VdbGrid(np.asarray(data), str(grid), i0, np.array(m, dtype=float), float(bg))
 
 
 def pbrt_uniformgrid(
-    path: Union[str, os.PathLike],
+    path: Union[str, os.PathLike[str]],
     array: np.ndarray,
     spacing: Union[float, Sequence[float]] = 1.0,
     origin: Sequence[float] = (0.0, 0.0, 0.0),
@@ -173,7 +179,7 @@ def pbrt_uniformgrid(
     )
     flat = a.reshape(-1)
 
-    def write(fh) -> None:
+    def write(fh: typing.TextIO) -> None:
         fh.write(head)
         # Rows of nx values (x fastest); str() of a float32 is the shortest
         # decimal that reads back as the same float32.

@@ -25,6 +25,11 @@ from .._progress import check_int, check_seed
 
 import argparse
 import sys
+from typing import TYPE_CHECKING, Any
+
+if TYPE_CHECKING:
+    import numpy as np
+    import numpy.typing as npt
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -128,7 +133,7 @@ def run(args: argparse.Namespace) -> int:
     return 0
 
 
-def _write_volume(out: str, ext: str, f, args) -> dict:
+def _write_volume(out: str, ext: str, f: npt.NDArray[np.floating[Any]], args: argparse.Namespace) -> dict[str, Any]:
     """Map the field to a density and write ``.vdb`` or ``.pbrt`` (float32)."""
     import numpy as np
 
