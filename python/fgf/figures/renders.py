@@ -264,7 +264,8 @@ def hero_regions(res: int) -> dict[str, npt.NDArray[np.bool_]]:
     m = 0.03
 
     def at_z(z: float) -> Img:
-        return o + ((z - o[2]) / d[..., 2])[..., None] * d
+        p: Img = o + ((z - o[2]) / d[..., 2])[..., None] * d
+        return p
 
     front, back, wall = at_z(hi[2]), at_z(lo[2]), at_z(WALL_Z)
 
@@ -461,7 +462,7 @@ def hero_figure(ctx: Context, seed: int) -> tuple[Figure, dict[str, Any], tuple[
     s = hero_settings(ctx.quick)
     ref = _reference(ctx, seed + 90)
     res, imgs = _hero_set(ctx, HERO_SIGMA_M, HERO_SW, tuple(HERO_MEDIA), seed, ref)
-    fig = new_figure(3.6 * len(imgs), 4.4)
+    fig = new_figure(3.6 * len(imgs), 4.9)
     axes = fig.subplots(1, len(imgs))
     for ax, (key, img) in zip(axes, imgs.items()):
         ax.imshow(srgb_preview(img, HERO_EXPOSURE))
@@ -492,7 +493,7 @@ def low_density_figure(ctx: Context, seed: int, ref: tuple[Img, Img]) -> tuple[F
     σ_m = 1, with the hero's α(1)."""
     s = hero_settings(ctx.quick)
     res, imgs = _hero_set(ctx, LOW_SIGMA_M, LOW_SW, ("exponential", "pink", "2fbm"), seed, ref)
-    fig = new_figure(7.4, 8.6)
+    fig = new_figure(7.4, 9.2)
     axes = fig.subplots(2, 2)
     for row, key in enumerate(("pink", "2fbm")):
         for col, k in enumerate(("exponential", key)):
@@ -512,3 +513,11 @@ def low_density_figure(ctx: Context, seed: int, ref: tuple[Img, Img]) -> tuple[F
         f"shadow mean / exponential's {p['shadow_ratio']:.2f} (pink), {f['shadow_ratio']:.2f} (2-fBm)."
     )
     return Figure(name, "Low density: exponential vs pink noise, exponential vs 2-fBm", caption), res
+
+
+def hero_summary(hero: dict[str, Any]) -> dict[str, dict[str, float]]:
+    """The top-level ``hero`` object of ``results.json``: per medium, ``tr1``
+    (the model's Tr at one cube side), ``stripe_visibility`` and
+    ``shadow_ratio`` (Monte Carlo, with ``*_se``)."""
+    keys = ("tr1", "stripe_visibility", "stripe_visibility_se", "shadow_ratio", "shadow_ratio_se")
+    return {name: {k: float(e[k]) for k in keys} for name, e in hero.items()}
