@@ -127,7 +127,7 @@ def run(ctx: Context) -> GroupResult:
             axes[r, 1 + c].imshow(srgb_preview(img, HERO_EXPOSURE))
             what = f"GBE kernel, α = {e['alpha_gbe']:.2f}" if name == "GBE" else f"FGF {label}"
             axes[r, 1 + c].set_title(
-                f"{what}\nstripes {m['stripe_visibility']:.3f} ± {m['stripe_visibility_se']:.3f}", fontsize=10
+                f"{what}\nstripes {m['stripe_visibility']:.3f} ± {m['stripe_visibility_se']:.4f}", fontsize=10
             )
             axes[r, 1 + c].set_axis_off()
         diff = (img_g - img_f).mean(axis=-1)

@@ -13,6 +13,16 @@ non-exponential (more transparent, heavier-tailed) medium.
 
 The panels share one exposure. ``results.json`` holds each image's mean
 RGB and its mean relative to the exponential render.
+
+The group also makes the side-lighting ("hero") set and the low-density
+pairs on ``scenes/figures/striped_wall.xml`` (a dense cube, σ_m = 4 and
+S_w = 16 for every H, in front of a striped wall): ``renders_side.png``
+(exponential vs pink noise vs 1-fBm vs 2-fBm) and
+``renders_low_density.png`` (σ_m = 1, the same α(1)). For each medium
+``results["hero"]`` holds the model's Tr through one cube side (``tr1``),
+the stripe visibility through the cube (:func:`stripe_fit`, regions from
+:func:`hero_regions`) and the shadow mean relative to the exponential
+cube's (``shadow_ratio``), each Monte Carlo number with its SE.
 """
 
 from __future__ import annotations
@@ -464,15 +474,16 @@ def hero_figure(ctx: Context, seed: int) -> tuple[Figure, dict[str, Any], tuple[
     s = hero_settings(ctx.quick)
     ref = _reference(ctx, seed + 90)
     res, imgs = _hero_set(ctx, HERO_SIGMA_M, HERO_SW, tuple(HERO_MEDIA), seed, ref)
-    fig = new_figure(3.6 * len(imgs), 4.5)
+    fig = new_figure(3.6 * len(imgs), 4.25)
     axes = fig.subplots(1, len(imgs))
     for ax, (key, img) in zip(axes, imgs.items()):
         ax.imshow(srgb_preview(img, HERO_EXPOSURE))
         ax.set_title(_panel_title(HERO_MEDIA[key][0], res[key]), fontsize=10)
         ax.set_axis_off()
+        ax.set_anchor("S")  # keep the three-line titles clear of the top edge
     name = save_figure(fig, ctx.out, "renders_side.png")
     vis = ", ".join(
-        f"{HERO_MEDIA[k][0].split(',')[0]} {e['stripe_visibility']:.3f} ± {e['stripe_visibility_se']:.3f}"
+        f"{HERO_MEDIA[k][0].split(',')[0]} {e['stripe_visibility']:.3f} ± {e['stripe_visibility_se']:.4f}"
         for k, e in res.items()
     )
     caption = (
@@ -503,6 +514,7 @@ def low_density_figure(ctx: Context, seed: int, ref: tuple[Img, Img]) -> tuple[F
             ax.imshow(srgb_preview(imgs[k], HERO_EXPOSURE))
             ax.set_title(_panel_title(HERO_MEDIA[k][0], res[k]), fontsize=10)
             ax.set_axis_off()
+            ax.set_anchor("S")
     name = save_figure(fig, ctx.out, "renders_low_density.png")
     e, p, f = res["exponential"], res["pink"], res["2fbm"]
     caption = (
@@ -510,8 +522,8 @@ def low_density_figure(ctx: Context, seed: int, ref: tuple[Img, Img]) -> tuple[F
         f"hero's α(1) (α = σ_m²/var[σ̄_t]); exponential vs pink noise (top) and vs 2-fBm (bottom). "
         f"{s['res']}×{s['res']} pixels, {s['spp']} spp. Even a thin cube differs: Tr(1) = {e['tr1']:.3f} "
         f"(exponential), {p['tr1']:.3f} (pink), {f['tr1']:.3f} (2-fBm); stripe visibility "
-        f"{e['stripe_visibility']:.3f} ± {e['stripe_visibility_se']:.3f}, {p['stripe_visibility']:.3f} ± "
-        f"{p['stripe_visibility_se']:.3f}, {f['stripe_visibility']:.3f} ± {f['stripe_visibility_se']:.3f}; "
+        f"{e['stripe_visibility']:.3f} ± {e['stripe_visibility_se']:.4f}, {p['stripe_visibility']:.3f} ± "
+        f"{p['stripe_visibility_se']:.4f}, {f['stripe_visibility']:.3f} ± {f['stripe_visibility_se']:.4f}; "
         f"shadow mean / exponential's {p['shadow_ratio']:.2f} (pink), {f['shadow_ratio']:.2f} (2-fBm)."
     )
     return Figure(name, "Low density: exponential vs pink noise, exponential vs 2-fBm", caption), res
