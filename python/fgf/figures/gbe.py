@@ -56,12 +56,14 @@ PAIRS = {"pink": ("pink noise, H = -0.1", -0.1), "2fbm": ("2-fBm, H = 1.2", 1.2)
 T_REPORT = (0.25, 1.0, 3.0)
 
 CAVEAT = (
-    "Certain (from the paper's abstract and docs/theory.md §4.2): the GBE transports light with the "
-    "energy-conserving, non-reciprocal kernel, and positive correlation gives slower-than-exponential "
-    "attenuation with a closed-form Tr. Not verified against the paper's text in this session: that its "
-    "closed form is exactly the gamma-mixture power law (1 + σ_m t/α)^(−α) with an α that does not depend on "
-    "the distance, as used here (fgf's 'davis' model); if the paper parametrises it differently, the GBE "
-    "panels show the gamma-mixture model under the GBE kernel, not necessarily Jarabo's medium."
+    "What is certain: the paper's abstract states that positive correlation gives slower-than-exponential "
+    "attenuation, for which it gives an analytic transmittance; its kernel is built like fgf's "
+    "energy-conserving one (docs/theory.md §4.2); and the constant-α power law is a standard closed form "
+    "for such media (Davis and Xu 2014, arXiv:1410.8200: direct transmission (1 + τ/a)^(−a)). Not verified "
+    "against the paper's text in this session: that Jarabo et al.'s analytic transmittance is exactly this "
+    "power law with an α that does not depend on the distance (fgf's 'davis' model, used here); if it is "
+    "parametrised differently, the GBE panels show the power law under the GBE kernel, not necessarily "
+    "Jarabo et al.'s medium."
 )
 
 
