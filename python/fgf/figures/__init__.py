@@ -182,7 +182,10 @@ def make_figures(
     dict
         The content of ``results.json``: ``groups[name]`` holds ``status``
         (``"ok"`` or ``"unavailable"``), ``reason``, ``figures`` and
-        ``results``; ``seconds[name]`` the wall time of each group.
+        ``results``; ``seconds[name]`` the wall time of each group; ``hero``
+        (when the ``renders`` group was made) maps ``exponential``, ``pink``,
+        ``1fbm``, ``2fbm`` to ``tr1``, ``stripe_visibility`` and
+        ``shadow_ratio`` with their SEs (:func:`renders.hero_summary`).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
