@@ -324,3 +324,38 @@ def test_scene_dir_without_the_scenes_is_reported(tmp_path):
     results = json.loads((tmp_path / "o" / "results.json").read_text())
     assert results["groups"]["renders"]["status"] == "unavailable"
     assert "Not made" in (tmp_path / "o" / "index.html").read_text()
+
+
+def test_hero_geometry_matches_the_scene():
+    """The measured regions are computed from constants in renders.py; they
+    must describe scenes/figures/striped_wall.xml."""
+    import xml.etree.ElementTree as ET
+    from pathlib import Path
+
+    from fgf.figures import DEFAULT_SCENE_DIR, renders
+
+    root = ET.parse(Path(DEFAULT_SCENE_DIR) / renders.HERO_SCENE).getroot()
+
+    def vec(s):
+        return tuple(float(x) for x in s.split(","))
+
+    cam = root.find("sensor/transform/lookat")
+    assert vec(cam.get("origin")) == renders.CAM_ORIGIN
+    assert vec(cam.get("target")) == renders.CAM_TARGET
+    assert float(root.find("sensor/float[@name='fov']").get("value")) == renders.CAM_FOV_X
+    lights = [s for s in root.findall("shape") if s.find("emitter") is not None]
+    assert len(lights) == 1
+    la = lights[0].find("transform/lookat")
+    assert vec(la.get("origin")) == renders.LIGHT_CENTRE and vec(la.get("target")) == renders.LIGHT_TARGET
+    assert float(lights[0].find("transform/scale").get("value")) == renders.LIGHT_HALF_SIZE
+    stripes = [s for s in root.findall("shape") if s.find("ref[@id='bright']") is not None]
+    xs = sorted(vec(s.find("transform/translate").get("value"))[0] for s in stripes)
+    assert xs == pytest.approx([renders.STRIPE_X0 + renders.STRIPE_PERIOD * i for i in range(len(xs))])
+    for s in stripes:
+        assert vec(s.find("transform/scale").get("value"))[0] == renders.STRIPE_HALF_WIDTH
+    walls = [s for s in root.findall("shape") if s.find("bsdf/rgb[@value='$dark']") is not None]
+    assert len(walls) == 1 and vec(walls[0].find("transform/translate").get("value"))[2] == renders.WALL_Z
+    cube = root.find("shape[@type='cube']/transform")
+    half = float(cube.find("scale").get("value"))
+    c = vec(cube.find("translate").get("value"))
+    assert tuple(ci - half for ci in c) == renders.CUBE_LO and tuple(ci + half for ci in c) == renders.CUBE_HI
