@@ -22,6 +22,13 @@ family error rates below are what a fresh seed would risk):
   the stated 5 % relative error of the realizations in the low-variance
   regime (α = 20 at t = 1).
 * renders: every image finite and not black (mean > 1e-4).
+* the hero set (side lighting, striped wall): stripe visibility ordered
+  exponential < 2-fBm < 1-fBm <= pink, each step by more than z = 4 SE of
+  the difference, and every visibility at least the uncollided part
+  Tr(1.03) (the longest chord of the measured rays) minus 4 SE: 7 checks,
+  family error rate <= 7 · 3.2e-5 (one-sided).
+* GBE vs 2-fBm (the same power law, same random numbers): mean relative
+  difference <= 1e-3.
 * equal models (Bitterli's Davis / Davis–Weinstein vs the FGF media they
   equal, same seed): mean relative difference ≤ 1e-3.
 """
@@ -40,8 +47,9 @@ GROUP_FILES = {
     "family": ["family_covariance.png", "family_2d.png"],
     "variance": ["variance.png"],
     "transmittance": ["transmittance_models.png", "transmittance_vs_realizations.png"],
-    "renders": ["renders.png"],
+    "renders": ["renders.png", "renders_side.png", "renders_low_density.png"],
     "comparisons": ["comparison_kernels.png", "comparison_bitterli.png"],
+    "gbe": ["comparison_gbe.png"],
     "ensemble": ["comparison_ensemble.png"],
 }
 
@@ -168,6 +176,81 @@ def test_renders_finite_and_not_black(quick_run):
         assert st["mean"] > 1e-4, label
 
 
+HERO_MEDIA = ("exponential", "pink", "1fbm", "2fbm")
+
+
+def test_hero_results(quick_run):
+    import fgf
+
+    hero = quick_run[2]["hero"]
+    assert set(hero) == set(HERO_MEDIA)
+    for name, e in hero.items():
+        for k in ("tr1", "stripe_visibility", "stripe_visibility_se", "shadow_ratio", "shadow_ratio_se"):
+            assert math.isfinite(e[k]), (name, k)
+        assert e["stripe_visibility_se"] > 0, name
+    assert hero["exponential"]["tr1"] == pytest.approx(math.exp(-4.0), rel=1e-12)
+    assert hero["exponential"]["shadow_ratio"] == 1.0
+    # The group's full records hold the models' parameters: recompute Tr at
+    # the longest chord of the measured rays.
+    full = _group(quick_run[2], "renders")["hero"]
+    z = 4.0
+    for name, e in full.items():
+        if name == "exponential":
+            m = fgf.Exponential(4.0)
+        else:
+            kw = {"length": math.sqrt(3.0)} if e["hurst"] > 0 else {}
+            m = fgf.Fgf(4.0, hurst=e["hurst"], sw=e["sw"], **kw)
+        assert float(m.tr(1.0)) == pytest.approx(e["tr1"], rel=1e-12), name
+        # The uncollided light alone carries the pattern with Tr(chord) >= Tr(1.03).
+        assert e["stripe_visibility"] >= float(m.tr(1.03)) - z * e["stripe_visibility_se"], name
+
+
+def _separated(a, b):
+    """a - b in units of the SE of the difference."""
+    return (a["stripe_visibility"] - b["stripe_visibility"]) / math.hypot(
+        a["stripe_visibility_se"], b["stripe_visibility_se"]
+    )
+
+
+def test_hero_stripe_visibility_ordering(quick_run):
+    hero = quick_run[2]["hero"]
+    z = 4.0
+    assert _separated(hero["2fbm"], hero["exponential"]) > z
+    assert _separated(hero["1fbm"], hero["2fbm"]) > z
+    # Pink noise (Tr(1) = 0.326) and 1-fBm (0.299) are close: pink is not
+    # below 1-fBm by more than z SE.
+    assert _separated(hero["pink"], hero["1fbm"]) > -z
+    # Correlated cubes throw lighter shadows than the exponential one.
+    for name in ("pink", "1fbm", "2fbm"):
+        e = hero[name]
+        assert e["shadow_ratio"] - 1.0 > z * e["shadow_ratio_se"], name
+
+
+def test_low_density(quick_run):
+    low = _group(quick_run[2], "renders")["low_density"]
+    media = low["media"]
+    assert set(media) == {"exponential", "pink", "2fbm"}
+    assert media["exponential"]["tr1"] == pytest.approx(math.exp(-low["sigma_m"]), rel=1e-12)
+    assert media["exponential"]["tr1"] < media["2fbm"]["tr1"] < media["pink"]["tr1"]
+    assert _separated(media["pink"], media["exponential"]) > 4.0
+    for e in media.values():
+        assert e["finite"] and e["mean"] > 1e-4
+
+
+def test_gbe(quick_run):
+    res = _group(quick_run[2], "gbe")["pairs"]
+    # The GBE's α is the FGF medium's α at t = 1: equal Tr there.
+    for key, e in res.items():
+        i = e["t"].index(1.0)
+        assert e["tr_gbe"][i] == pytest.approx(e["tr_fgf"][i], rel=1e-12), key
+    # Pink noise: α(t) grows with t, so the constant-α GBE has the heavier
+    # tail beyond one side and the lighter one before it.
+    p = res["pink"]
+    assert p["tr_gbe"][-1] > p["tr_fgf"][-1] and p["tr_gbe"][0] < p["tr_fgf"][0]
+    # k-fBm is the same power law: the same image with the same random numbers.
+    assert res["2fbm"]["mean_relative_difference"] <= 1e-3
+
+
 def test_comparisons(quick_run):
     res = _group(quick_run[2], "comparisons")
     for key, e in res["kernels"].items():
@@ -241,3 +324,38 @@ def test_scene_dir_without_the_scenes_is_reported(tmp_path):
     results = json.loads((tmp_path / "o" / "results.json").read_text())
     assert results["groups"]["renders"]["status"] == "unavailable"
     assert "Not made" in (tmp_path / "o" / "index.html").read_text()
+
+
+def test_hero_geometry_matches_the_scene():
+    """The measured regions are computed from constants in renders.py; they
+    must describe scenes/figures/striped_wall.xml."""
+    import xml.etree.ElementTree as ET
+    from pathlib import Path
+
+    from fgf.figures import DEFAULT_SCENE_DIR, renders
+
+    root = ET.parse(Path(DEFAULT_SCENE_DIR) / renders.HERO_SCENE).getroot()
+
+    def vec(s):
+        return tuple(float(x) for x in s.split(","))
+
+    cam = root.find("sensor/transform/lookat")
+    assert vec(cam.get("origin")) == renders.CAM_ORIGIN
+    assert vec(cam.get("target")) == renders.CAM_TARGET
+    assert float(root.find("sensor/float[@name='fov']").get("value")) == renders.CAM_FOV_X
+    lights = [s for s in root.findall("shape") if s.find("emitter") is not None]
+    assert len(lights) == 1
+    la = lights[0].find("transform/lookat")
+    assert vec(la.get("origin")) == renders.LIGHT_CENTRE and vec(la.get("target")) == renders.LIGHT_TARGET
+    assert float(lights[0].find("transform/scale").get("value")) == renders.LIGHT_HALF_SIZE
+    stripes = [s for s in root.findall("shape") if s.find("ref[@id='bright']") is not None]
+    xs = sorted(vec(s.find("transform/translate").get("value"))[0] for s in stripes)
+    assert xs == pytest.approx([renders.STRIPE_X0 + renders.STRIPE_PERIOD * i for i in range(len(xs))])
+    for s in stripes:
+        assert vec(s.find("transform/scale").get("value"))[0] == renders.STRIPE_HALF_WIDTH
+    walls = [s for s in root.findall("shape") if s.find("bsdf/rgb[@value='$dark']") is not None]
+    assert len(walls) == 1 and vec(walls[0].find("transform/translate").get("value"))[2] == renders.WALL_Z
+    cube = root.find("shape[@type='cube']/transform")
+    half = float(cube.find("scale").get("value"))
+    c = vec(cube.find("translate").get("value"))
+    assert tuple(ci - half for ci in c) == renders.CUBE_LO and tuple(ci + half for ci in c) == renders.CUBE_HI

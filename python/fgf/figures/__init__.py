@@ -20,9 +20,13 @@ The figure groups (one module each):
                    exact 1D realizations (pink against t, k-fBm against L)
 ``transmittance``  Tr(t) for exponential, white, pink and k-fBm media; the
                    gamma closure against the ensemble average of e^{-τ}
-``renders``        one scene, exponential vs H = -0.1, 0.2, 1.2
+``renders``        one scene, exponential vs H = -0.1, 0.2, 1.2; the
+                   side-lighting hero set (striped wall) and the
+                   low-density pairs
 ``comparisons``    energy-conserving vs reciprocal kernel; the Bitterli
                    models (difference images, mean relative errors)
+``gbe``            the GBE of Jarabo et al. 2018 (constant-α power law,
+                   energy-conserving kernel) beside FGF media
 ``ensemble``       uncorrelated vs correlated media: the model against
                    explicit 3D realizations (``fgf.ensemble``)
 =================  ==========================================================
@@ -54,7 +58,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Protocol, Union, cast
 
 from ._common import Context, GroupResult, Unavailable, write_atomic
-from . import comparisons, ensemble, family, renders, transmittance, variance
+from . import comparisons, ensemble, family, gbe, renders, transmittance, variance
 
 __all__ = ["GROUPS", "make_figures", "Unavailable"]
 
@@ -65,6 +69,7 @@ GROUPS = {
     "transmittance": transmittance,
     "renders": renders,
     "comparisons": comparisons,
+    "gbe": gbe,
     "ensemble": ensemble,
 }
 
@@ -177,7 +182,10 @@ def make_figures(
     dict
         The content of ``results.json``: ``groups[name]`` holds ``status``
         (``"ok"`` or ``"unavailable"``), ``reason``, ``figures`` and
-        ``results``; ``seconds[name]`` the wall time of each group.
+        ``results``; ``seconds[name]`` the wall time of each group; ``hero``
+        (when the ``renders`` group was made) maps ``exponential``, ``pink``,
+        ``1fbm``, ``2fbm`` to ``tr1``, ``stripe_visibility`` and
+        ``shadow_ratio`` with their SEs (:func:`renders.hero_summary`).
     """
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
@@ -225,6 +233,8 @@ def make_figures(
             bar.close()
         report["seconds"][name] = round(time.perf_counter() - start, 3)
         report["groups"][name] = entry
+        if name == "renders" and entry["status"] == "ok":
+            report["hero"] = renders.hero_summary(entry["results"]["hero"])
         # Rewrite the outputs after each group so that an interrupted run
         # still leaves a consistent gallery of the groups that finished.
         _write_outputs(out, report)
