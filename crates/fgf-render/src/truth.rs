@@ -250,7 +250,7 @@ pub struct TruthPlan {
 fn constant_alpha(i: usize, sigma: f64, model: &TransmittanceDesc) -> Result<f64, RenderError> {
     match *model {
         TransmittanceDesc::Davis { alpha } => Ok(alpha),
-        TransmittanceDesc::DavisWeinstein { h, c } if h == 1.0 => Ok(1.0 / (c * c)),
+        TransmittanceDesc::DavisWeinstein { h: 1.0, c } => Ok(1.0 / (c * c)),
         TransmittanceDesc::DavisWeinstein { h, .. } => Err(RenderError::Unsupported(format!(
             "medium {i}: a Davis-Weinstein medium with h = {h} < 1 has no constant alpha, so no mixture of homogeneous media to average (docs/theory.md §6.6); the truth covers k-fBm 'fgf' and 'davis' media"
         ))),
@@ -319,8 +319,8 @@ pub fn plan(scene: &SceneDesc, nodes: Option<usize>) -> Result<TruthPlan, Render
         };
         let exponential = matches!(model, TransmittanceDesc::Exponential);
         if !exponential {
-            for c in 0..3 {
-                let a = constant_alpha(i, sigma_t[c] as f64, model)?;
+            for &s in sigma_t {
+                let a = constant_alpha(i, s as f64, model)?;
                 match alpha {
                     None => alpha = Some((i, a)),
                     Some((j, b)) if !same_alpha(a, b) => {
@@ -608,6 +608,69 @@ mod tests {
         assert!(worst_error(&gamma_nodes(0.7, n).unwrap(), 0.7, 12.0) <= NODE_TOLERANCE);
         // A thin, nearly exponential medium needs only the minimum.
         assert_eq!(default_node_count(8.0, 1.0).unwrap(), Some(MIN_NODES));
+    }
+
+    fn scene(medium: &str) -> SceneDesc {
+        let xml = format!(
+            r#"<scene version="3.0.0">
+  <integrator type="volpath"/>
+  <sensor type="perspective"><float name="fov" value="10"/>
+    <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="4"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="4"/><integer name="height" value="4"/></film>
+  </sensor>
+  {medium}
+  <shape type="cube"><bsdf type="null"/><ref name="interior" id="m"/></shape>
+  <emitter type="constant"/>
+</scene>"#
+        );
+        fgf_scene::load_str(&xml, "test.xml", std::path::Path::new("."), &[]).unwrap()
+    }
+
+    #[test]
+    fn plan_rewrites_the_medium_as_homogeneous_levels() {
+        let sc = scene(
+            r#"<medium type="nonexponential" id="m"><string name="transmittance" value="davis"/>
+               <float name="alpha" value="1.5"/><float name="sigma_t" value="2"/></medium>"#,
+        );
+        let p = plan(&sc, None).unwrap();
+        assert_eq!(p.alpha, 1.5);
+        assert_eq!(p.media, vec![0]);
+        // The cube [-1, 1]^3: diagonal 2√3, σ_m = 2.
+        assert!((p.tau_max - 4.0 * 3f64.sqrt()).abs() < 1e-6);
+        assert!(p.auto_nodes && p.closed_form_error <= NODE_TOLERANCE);
+        for (i, q) in p.nodes.iter().enumerate() {
+            let MediumDesc::Homogeneous { sigma_t, .. } = &p.node_scene(&sc, i).unwrap().media[0]
+            else {
+                panic!("node {i}: not homogeneous")
+            };
+            assert!((sigma_t[0] as f64 - 2.0 * q.x).abs() < 1e-5 * (1.0 + q.x));
+        }
+        assert!(p.node_scene(&sc, p.nodes.len()).is_err());
+        assert_eq!(plan(&sc, Some(3)).unwrap().nodes.len(), 3);
+        assert_ne!(node_seed(0, 0), node_seed(0, 1));
+        assert_ne!(node_seed(0, 1), node_seed(1, 1));
+    }
+
+    #[test]
+    fn media_without_a_constant_alpha_are_refused() {
+        let pink = scene(
+            r#"<medium type="fgf" id="m"><float name="hurst" value="-0.2"/><float name="sw" value="1"/></medium>"#,
+        );
+        let e = plan(&pink, None).unwrap_err().to_string();
+        assert!(
+            e.contains("pink noise") && e.contains("no constant alpha"),
+            "{e}"
+        );
+        let rgb = scene(
+            r#"<medium type="fgf" id="m"><rgb name="sigma_t" value="1, 2, 3"/><float name="hurst" value="0.5"/>
+               <float name="sw" value="1"/></medium>"#,
+        );
+        let e = plan(&rgb, None).unwrap_err().to_string();
+        assert!(
+            e.contains("RGB sigma_t channels have different alpha"),
+            "{e}"
+        );
     }
 
     #[test]
