@@ -33,7 +33,7 @@ from typing import Any
 import numpy as np
 import numpy.typing as npt
 
-from ._common import Context, Figure, GroupResult, Unavailable, new_figure, save_figure, srgb_preview
+from ._common import Context, Figure, GroupResult, Unavailable, need, new_figure, save_figure, srgb_preview
 from .renders import EXPOSURE, SCENE, SIGMA_M, defines_for, render, settings, sw_for
 
 TITLE = "5c. The model against the exact truth (k-fBm, constant α)"
@@ -52,8 +52,15 @@ LIGHT_CENTRE = np.array([-2.5, 2.0, 0.5])
 GROUND_HALF = 4.0
 #: The hero scene (striped_wall.xml, if present), same cube.
 HERO_SCENE = "striped_wall.xml"
+#: The reference cube (``scenes/fgf-cube-2fbm.xml``: σ_m = 4, L = 1, the
+#: camera and light of the figure scene), relative to the figure scenes.
+REFERENCE_SCENE = "../fgf-cube-2fbm.xml"
+REFERENCE_SIGMA_M = 4.0
+REFERENCE_LENGTH = 1.0
 HERO_CAMERA = {"origin": (0.0, 1.6, 4.3), "target": (0.0, 0.7, -0.2), "fov": 40.0}
 HERO_LIGHT_CENTRE = np.array([-3.0, 2.2, 0.8])
+#: The hero scene's back wall at z = -1.2 hides the ground behind it.
+HERO_GROUND_Z_MIN = -1.2
 HERO_SIGMA_M = 4.0
 HERO_SW = 16.0
 
@@ -62,8 +69,9 @@ Mask = npt.NDArray[np.bool_]
 
 
 def steps(quick: bool) -> int:
-    # Three renders per α, three for the hero scene (ticked anyway when it is absent), the figure.
-    return len(ALPHAS) * 3 + 3 + 1
+    # Three renders per α and cube scene, three for the hero scene (ticked
+    # anyway when it is absent), the figure.
+    return 2 * len(ALPHAS) * 3 + 3 + 1
 
 
 def truth_spp(quick: bool) -> int:
@@ -102,17 +110,25 @@ def _slab_hit(o: npt.NDArray[np.float64], d: npt.NDArray[np.float64], t_max: npt
     return hit
 
 
-def region_masks(res: int, camera: dict[str, Any], light: npt.NDArray[np.float64]) -> tuple[Mask, Mask]:
+def region_masks(
+    res: int, camera: dict[str, Any], light: npt.NDArray[np.float64], ground_z_min: float = -GROUND_HALF
+) -> tuple[Mask, Mask]:
     """``(cube, shadow)`` pixel masks: the camera ray crosses the cube; the
-    ray reaches the ground (y = 0) without crossing the cube, and the
-    segment from that ground point to the light's centre crosses it."""
+    ray reaches the ground (y = 0, ``z > ground_z_min``) without crossing the
+    cube, and the segment from that ground point to the light's centre
+    crosses it."""
     o, d = camera_rays(res, camera)
     oo = np.broadcast_to(o, d.shape)
     cube = _slab_hit(oo, d, np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_ground = np.where(d[..., 1] < 0, -o[1] / d[..., 1], np.inf)
     p = o + d * t_ground[..., None]
-    on_ground = np.isfinite(t_ground) & (np.abs(p[..., 0]) < GROUND_HALF) & (np.abs(p[..., 2]) < GROUND_HALF)
+    on_ground = (
+        np.isfinite(t_ground)
+        & (np.abs(p[..., 0]) < GROUND_HALF)
+        & (np.abs(p[..., 2]) < GROUND_HALF)
+        & (p[..., 2] > ground_z_min)
+    )
     to_light = light - np.where(on_ground[..., None], p, 0.0)
     shadow = on_ground & ~cube & _slab_hit(np.where(on_ground[..., None], p, 0.0), to_light, 1.0)
     return cube, shadow
@@ -204,6 +220,7 @@ def _figure(
     masks: tuple[Mask, Mask],
     per_alpha: dict[str, Any],
     sw: float,
+    reference: dict[str, Any] | None = None,
 ) -> Figure:
     s = settings(ctx.quick)
     (ec, ec_var), (rc, rc_var) = images["energy_conserving"], images["reciprocal"]
@@ -261,13 +278,35 @@ def _figure(
         )
         for a in ALPHAS
     )
+    ds = [(per_alpha[_key(a)][k]["cube"], k) for a in ALPHAS for k in KERNELS]
+    above = sum(r["relative_difference"] > 0 for r, k in ds if k == "energy_conserving")
+    below = sum(r["relative_difference"] < 0 for r, k in ds if k == "reciprocal")
+    significant = sum(abs(r["relative_difference"]) > 2 * r["se"] for r, _ in ds)
+    bracket = (
+        f"In the cube the energy-conserving kernel is above the truth at {above} of {len(ALPHAS)} α and the "
+        f"reciprocal kernel below it at {below} of {len(ALPHAS)} ({significant} of these {len(ds)} departures exceed "
+        "2 SE): the two kernels bracket the truth."
+        if above == below == len(ALPHAS)
+        else f"In the cube the energy-conserving kernel is above the truth at {above} of {len(ALPHAS)} α and the "
+        f"reciprocal kernel below it at {below} of {len(ALPHAS)} ({significant} of {len(ds)} departures exceed 2 SE)."
+    )
+    more = ""
+    if reference is not None:
+        more = "On the reference cube (scenes/fgf-cube-2fbm.xml, σ_m = 4, L = 1), cube region: " + "; ".join(
+            f"α = {a:g}: "
+            + ", ".join(
+                f"{k.replace('_', '-')} {100 * reference[_key(a)][k]['cube']['relative_difference']:+.1f} ± "
+                f"{100 * reference[_key(a)][k]['cube']['se']:.1f} %"
+                for k in KERNELS
+            )
+            for a in ALPHAS
+        ) + ". "
     caption = (
         f"k-fBm media (H = {HURST}, L = √3, σ_m = {SIGMA_M:g}, albedo 0.8) on the scene of figure 4 "
         f"(scenes/figures/{SCENE}); shown: S_w = {sw:.3g}, α = {shown['alpha']:.3g}. The truth is the average of "
         "classical renders of homogeneous realizations σ = X σ_m, X ~ Gamma(α, mean 1), by generalised "
         "Gauss–Laguerre quadrature (fgf truth, docs/theory.md §6); the model is rendered under both kernels. "
-        f"Cube-region differences (model − truth)/truth ± SE: {summary}. The energy-conserving kernel is "
-        "above the truth and the reciprocal kernel below it: the two kernels bracket the truth. Yellow: cube "
+        f"Cube-region differences (model − truth)/truth ± SE: {summary}. {bracket} {more}Yellow: cube "
         f"region; cyan: shadow region. {s['res']}², model {s['spp']} spp, truth {truth_spp(ctx.quick)} spp per node."
     )
     return Figure(name, "The model against the exact truth", caption)
@@ -301,9 +340,24 @@ def run(ctx: Context) -> GroupResult:
         "truth_spp_per_node": truth_spp(ctx.quick),
         "cube": per_alpha,
     }
+    # The same on the reference cube (σ_m = 4, L = 1): optically twice as thick.
+    if (ctx.scene_dir / REFERENCE_SCENE).is_file():
+        Fgf = need("Fgf")
+        alpha_per_sw = float(Fgf(REFERENCE_SIGMA_M, hurst=HURST, sw=1.0, length=REFERENCE_LENGTH).alpha(1.0))
+        ref: dict[str, Any] = {}
+        for j, alpha in enumerate(ALPHAS):
+            sw = alpha_per_sw / alpha
+            d = {"hurst": repr(HURST), "sw": repr(sw), "length": repr(REFERENCE_LENGTH)}
+            r, _, _ = compare(ctx, d, seed + 500 + 100 * j, masks, scene=REFERENCE_SCENE)
+            r["sw"] = sw
+            ref[_key(alpha)] = r
+        results["reference_cube"] = {"scene": "scenes/fgf-cube-2fbm.xml", "sigma_m": REFERENCE_SIGMA_M, "length": REFERENCE_LENGTH, "alphas": ref}
+    else:
+        for _ in range(len(ALPHAS) * 3):
+            ctx.tick()
     hero = ctx.scene_dir / HERO_SCENE
     if hero.is_file():
-        hero_masks = region_masks(s["res"], HERO_CAMERA, HERO_LIGHT_CENTRE)
+        hero_masks = region_masks(s["res"], HERO_CAMERA, HERO_LIGHT_CENTRE, HERO_GROUND_Z_MIN)
         d = {"medium": "fgf", "sigma_t": repr(HERO_SIGMA_M), "albedo": "0.8", "hurst": repr(HURST), "sw": repr(HERO_SW)}
         try:
             results["hero"], _, _ = compare(ctx, d, seed + 1000, hero_masks, scene=HERO_SCENE)
@@ -313,5 +367,5 @@ def run(ctx: Context) -> GroupResult:
         for _ in range(3):
             ctx.tick()
     ctx.tick()
-    fig = _figure(ctx, shown[0], shown[1], masks, per_alpha, sw_shown)
+    fig = _figure(ctx, shown[0], shown[1], masks, per_alpha, sw_shown, results.get("reference_cube", {}).get("alphas"))
     return GroupResult([fig], results)
