@@ -223,3 +223,17 @@ def test_cli_ctrl_c_writes_nothing_and_exits_130(tmp_path):
     assert p.returncode == 130, err
     assert "interrupted; nothing written" in err and "Traceback" not in err
     assert not out.exists()
+
+
+def test_truth_of_an_rgb_davis_medium_with_density_is_the_closed_form_per_channel(tmp_path):
+    # One alpha for the three channels; the density becomes a 3-channel
+    # heterogeneous grid sigma_c rho, scaled by x_i.
+    write_vol(tmp_path / "rho.vol", 0.5)
+    medium = medium_xml("nonexponential", sigma="1, 2, 4", density="rho.vol", transmittance="davis", alpha="1.5")
+    scene = through_cube_scene(tmp_path, medium)
+    img, se = fgf.truth(scene, spp=256, seed=3, progress=False, return_stderr=True)
+    mean = img.reshape(-1, 3).mean(axis=0)
+    se_mean = np.sqrt((se.astype(np.float64) ** 2).sum(axis=(0, 1))) / (se.shape[0] * se.shape[1])
+    for c, sigma in enumerate((1.0, 2.0, 4.0)):
+        want = (1.0 + 0.5 * sigma / 1.5) ** -1.5
+        assert abs(mean[c] - want) <= 4.0 * se_mean[c] + 1.5e-4 * sigma * want, (c, mean[c], want, se_mean[c])
