@@ -653,6 +653,35 @@ mod tests {
     }
 
     #[test]
+    fn truth_is_the_weighted_sum_of_the_node_renders() {
+        let sc = scene(
+            r#"<medium type="fgf" id="m"><float name="hurst" value="1.2"/><float name="sw" value="3"/>
+               <float name="sigma_t" value="1.5"/><rgb name="albedo" value="0.5"/></medium>"#,
+        );
+        let p = plan(&sc, Some(4)).unwrap();
+        let opts = TruthOptions {
+            spp: Some(2),
+            seed: 9,
+            variance: true,
+        };
+        let out = truth(&sc, &p, &opts, &fgf_core::NoProgress).unwrap();
+        let mut sum = vec![0f64; out.image.len()];
+        for (i, q) in p.nodes.iter().enumerate() {
+            let node = render_node(&sc, &p, i, &opts, &fgf_core::NoProgress).unwrap();
+            for (s, &v) in sum.iter_mut().zip(&node.image) {
+                *s += q.weight * v as f64;
+            }
+        }
+        let want: Vec<f32> = sum.iter().map(|&s| s as f32).collect();
+        assert_eq!(out.image, want);
+        assert!(out
+            .stderr
+            .unwrap()
+            .iter()
+            .all(|s| s.is_finite() && *s >= 0.0));
+    }
+
+    #[test]
     fn media_without_a_constant_alpha_are_refused() {
         let pink = scene(
             r#"<medium type="fgf" id="m"><float name="hurst" value="-0.2"/><float name="sw" value="1"/></medium>"#,
