@@ -50,6 +50,7 @@ GROUP_FILES = {
     "renders": ["renders.png", "renders_side.png", "renders_low_density.png"],
     "comparisons": ["comparison_kernels.png", "comparison_bitterli.png"],
     "gbe": ["comparison_gbe.png"],
+    "truth": ["comparison_truth.png"],
     "ensemble": ["comparison_ensemble.png"],
 }
 

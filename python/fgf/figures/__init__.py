@@ -27,6 +27,8 @@ The figure groups (one module each):
                    models (difference images, mean relative errors)
 ``gbe``            the GBE of Jarabo et al. 2018 (constant-α power law,
                    energy-conserving kernel) beside FGF media
+``truth``          the model under both kernels against the exact truth of
+                   k-fBm media (``fgf.truth``), α = 1.14, 2, 4, 8
 ``ensemble``       uncorrelated vs correlated media: the model against
                    explicit 3D realizations (``fgf.ensemble``)
 =================  ==========================================================
@@ -58,7 +60,7 @@ from pathlib import Path
 from typing import Any, Callable, Iterable, Protocol, Union, cast
 
 from ._common import Context, GroupResult, Unavailable, write_atomic
-from . import comparisons, ensemble, family, gbe, renders, transmittance, variance
+from . import comparisons, ensemble, family, gbe, renders, transmittance, truth, variance
 
 __all__ = ["GROUPS", "make_figures", "Unavailable"]
 
@@ -70,6 +72,7 @@ GROUPS = {
     "renders": renders,
     "comparisons": comparisons,
     "gbe": gbe,
+    "truth": truth,
     "ensemble": ensemble,
 }
 
@@ -235,6 +238,8 @@ def make_figures(
         report["groups"][name] = entry
         if name == "renders" and entry["status"] == "ok":
             report["hero"] = renders.hero_summary(entry["results"]["hero"])
+        if name == "truth" and entry["status"] == "ok":
+            report["truth"] = entry["results"]
         # Rewrite the outputs after each group so that an interrupted run
         # still leaves a consistent gallery of the groups that finished.
         _write_outputs(out, report)
