@@ -23,11 +23,11 @@ use std::f64::consts::{FRAC_1_SQRT_2, PI};
 /// Half-width of the table of the map in units of `Z` (beyond it the map is
 /// held constant: probability 1.5e-23).
 const Z_MAX: f64 = 10.0;
-/// Table nodes (`dz = 0.01`).
-const NODES: usize = 2001;
+/// Table nodes (`dz ≈ 0.017`).
+const NODES: usize = 1201;
 /// Hermite terms kept in `T(r)`; the remainder of the variance is put on
 /// the next power, which keeps `T(1)` exact.
-const HERMITE_TERMS: usize = 100;
+const HERMITE_TERMS: usize = 64;
 
 /// Regularized incomplete gamma functions `(P(a, x), Q(a, x))`: the power
 /// series for `x < a + 1`, else the continued fraction of `Q` (modified
@@ -231,7 +231,8 @@ impl GammaCopula {
 /// A calibrated gamma-copula medium for one grid.
 #[derive(Debug, Clone)]
 pub struct Calibration {
-    /// Hurst parameter of the 3D Gaussian field `Z` (`-d/2 < H_Z < 0`).
+    /// Hurst parameter of the 3D Gaussian field `Z` (unanchored and periodic
+    /// on the padded domain, so stationary there even for `H_Z > 0`).
     pub hurst_gauss: f64,
     /// Shape of the voxel marginal.
     pub alpha_voxel: f64,
@@ -272,6 +273,15 @@ pub fn copula_line_variances(
         .collect()
 }
 
+/// The synthesis refuses `H = 0` (and integers): keep the search off them.
+fn gauss_hurst(h: f64) -> f64 {
+    if h.abs() < 1e-3 {
+        1e-3f64.copysign(h)
+    } else {
+        h
+    }
+}
+
 fn golden(lo: f64, hi: f64, iters: usize, mut f: impl FnMut(f64) -> f64) -> (f64, f64) {
     let g = 0.5 * (5f64.sqrt() - 1.0);
     let (mut a, mut b) = (lo, hi);
@@ -304,7 +314,7 @@ fn golden(lo: f64, hi: f64, iters: usize, mut f: impl FnMut(f64) -> f64) -> (f64
 /// grid of `base` (its `shape`, `spacing` and `padding`; `hurst`, `sw` and
 /// `seed` are ignored) has `σ_m² var[X̄_m]` closest to `target[i]` at
 /// `m = lengths[i]`, in the least-squares sense on `ln` (nested
-/// golden-section searches, `H_Z ∈ [-d/2 + 0.05, -0.01]`, `ln α` within 3 of
+/// golden-section searches, `H_Z ∈ [-d/2 + 0.05, 0.95]` (unanchored, periodic), `ln α` within 3 of
 /// `ln(σ_m²/target[0])`). Deterministic.
 pub fn calibrate_gamma(
     base: &SynthParams,
@@ -317,7 +327,8 @@ pub fn calibrate_gamma(
     let d = base.shape.len() as f64;
     let rho_for = |h: f64| -> Result<(Vec<f64>, f64), ParamError> {
         let mut p = base.clone();
-        p.hurst = h;
+        p.hurst = gauss_hurst(h);
+        p.anchor = crate::Anchor::None;
         p.sw = 1.0;
         let c = axis_covariance(&p)?;
         let v = c[0];
@@ -334,7 +345,7 @@ pub fn calibrate_gamma(
     let (a_lo, a_hi) = ((ln_ref - 3.0).max(1e-3f64.ln()), (ln_ref + 3.0).min(1e5f64.ln()));
     let mut err: Option<ParamError> = None;
     let inner = |rho: &[f64], err: &mut Option<ParamError>| -> (f64, f64) {
-        golden(a_lo, a_hi, 22, |la| match GammaCopula::new(la.exp()) {
+        golden(a_lo, a_hi, 15, |la| match GammaCopula::new(la.exp()) {
             Ok(c) => loss(&copula_line_variances(&c, rho, lengths, sigma_m)),
             Err(e) => {
                 *err = Some(e);
@@ -342,7 +353,7 @@ pub fn calibrate_gamma(
             }
         })
     };
-    let (h_best, _) = golden(-d / 2.0 + 0.05, -0.01, 24, |h| match rho_for(h) {
+    let (h_best, _) = golden(-d / 2.0 + 0.05, 0.95, 18, |h| match rho_for(h) {
         Ok((rho, _)) => inner(&rho, &mut err).1,
         Err(e) => {
             err = Some(e);
@@ -360,8 +371,10 @@ pub fn calibrate_gamma(
     }
     let copula = GammaCopula::new(la.exp())?;
     let achieved = copula_line_variances(&copula, &rho, lengths, sigma_m);
+    let h_best = gauss_hurst(h_best);
     let mut p = base.clone();
     p.hurst = h_best;
+    p.anchor = crate::Anchor::None;
     p.sw = 1.0;
     debug_assert!((discrete_spectral_variance(&p)? - gv).abs() <= 1e-9 * gv);
     Ok((
