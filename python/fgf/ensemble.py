@@ -62,6 +62,7 @@ def ensemble(
     return_info: Literal[False] = False,
     padding: float | None = None,
     marginal: Marginal = "auto",
+    return_realizations: bool = False,
 ) -> tuple[Image, Image]: ...
 @overload
 def ensemble(
@@ -77,6 +78,7 @@ def ensemble(
     return_info: Literal[True],
     padding: float | None = None,
     marginal: Marginal = "auto",
+    return_realizations: bool = False,
 ) -> tuple[Image, Image, dict[str, Any]]: ...
 @overload
 def ensemble(
@@ -91,6 +93,7 @@ def ensemble(
     return_info: bool = False,
     padding: float | None = None,
     marginal: Marginal = "auto",
+    return_realizations: bool = False,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]: ...
 def ensemble(
     scene: str | os.PathLike[str],
@@ -104,6 +107,7 @@ def ensemble(
     return_info: bool = False,
     padding: float | None = None,
     marginal: Marginal = "auto",
+    return_realizations: bool = False,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]:
     """Average classical renders of explicit realizations of the scene's ``fgf`` media.
 
@@ -152,6 +156,11 @@ def ensemble(
     marginal : {"auto", "gamma", "gaussian"}
         The one-point law of the extinction (see the module docs); ``"auto"``
         is gamma for pink noise and Gaussian for k-fBm.
+    return_realizations : bool
+        Also put every realization's image, ``(N, H, W, 3)`` float32 in
+        realization order, in ``info["realizations"]`` (implies nothing
+        about ``return_info``; use both). Region means need them for their
+        standard error: one realization moves many pixels together.
 
     Returns
     -------
@@ -184,6 +193,7 @@ def ensemble(
             progress=sink,
             padding=None if padding is None else float(padding),
             marginal=str(marginal),
+            keep_realizations=bool(return_realizations),
         )
     if interrupted:
         raise KeyboardInterrupt(f"ensemble interrupted after {info['realizations_done']} realizations")

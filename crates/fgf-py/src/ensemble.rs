@@ -5,6 +5,7 @@ use crate::errors::ParameterError;
 use crate::progress::run_job;
 use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
 use fgf_render::ensemble::{ensemble, total_samples, EnsembleError, EnsembleOptions, Marginal};
+use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -23,7 +24,7 @@ type EnsembleResult<'py> = (
 /// per medium with its grid and variance report); the typed wrapper is
 /// `fgf.ensemble`.
 #[pyfunction]
-#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, padding=None, marginal=None))]
+#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, padding=None, marginal=None, keep_realizations=false))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble_scene<'py>(
     py: Python<'py>,
@@ -37,6 +38,7 @@ fn ensemble_scene<'py>(
     progress: Option<Bound<'py, PyAny>>,
     padding: Option<f64>,
     marginal: Option<String>,
+    keep_realizations: bool,
 ) -> PyResult<EnsembleResult<'py>> {
     let marginal = match marginal.as_deref() {
         None => Marginal::Auto,
@@ -72,6 +74,7 @@ fn ensemble_scene<'py>(
         seed,
         padding,
         marginal,
+        keep_realizations,
     };
     let total = total_samples(&desc, &opts);
     let source = scene.display().to_string();
@@ -115,6 +118,12 @@ fn ensemble_scene<'py>(
         media.append(d)?;
     }
     info.set_item("media", media)?;
+    if keep_realizations {
+        let n = out.realization_images.len();
+        let flat: Vec<f32> = out.realization_images.concat();
+        let arr = numpy::PyArray1::from_vec(py, flat).reshape([n, h, w, 3])?;
+        info.set_item("realizations", arr)?;
+    }
     Ok((mean, stderr, info, job.interrupted || cancelled))
 }
 

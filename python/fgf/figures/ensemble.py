@@ -44,6 +44,146 @@ ENSEMBLE_CASES = (
 )
 
 
+#: The pink scene where the model and the exponential differ most clearly
+#: (σ_m = 4, S_w = 16, H = -0.1: α(1) = 0.52, Tr(1) = 0.33 against
+#: e^-4 = 0.018), on ``scenes/fgf-cube-pink.xml``.
+PINK_DEFINES = {"hurst": "-0.1", "sw": "16"}
+#: The same scene with a white-noise strength so small that the model is
+#: the exponential one (α(1) ~ 1e10).
+EXPONENTIAL_DEFINES = {"hurst": "-0.1", "sw": "1e-9"}
+
+Img = np.ndarray
+
+
+def pink_ensemble_comparison(
+    scene: str | Any,
+    *,
+    defines: dict[str, Any] | None = None,
+    realizations: int = 64,
+    resolution: int = 64,
+    spp: int = 16,
+    model_spp: int = 256,
+    seed: int = 0,
+    padding: float | None = None,
+    return_info: bool = False,
+) -> Any:
+    """The fgf model render of a pink-noise scene and the calibrated
+    ensemble's mean and per-pixel standard error (``fgf.ensemble`` with
+    gamma marginals, ``docs/theory.md`` §1.8).
+
+    Returns ``(model, mean, se)``, each ``(H, W, 3)`` float64; with
+    ``return_info``, ``(model, model_var, mean, se, info)`` where ``info`` is
+    ``fgf.ensemble``'s (with ``info["realizations"]``, every realization's
+    image). ``defines`` go to both (e.g. ``{"res": 64, "sw": 16}``); the
+    model uses seed ``seed``, the ensemble ``seed + 1``.
+    """
+    import fgf
+
+    d = dict(defines or {})
+    model, var = fgf.render(scene, spp=model_spp, seed=seed, defines=d, progress=False, return_variance=True)
+    mean, se, info = fgf.ensemble(
+        scene,
+        realizations=realizations,
+        resolution=resolution,
+        spp=spp,
+        seed=seed + 1,
+        defines=d,
+        progress=False,
+        padding=padding,
+        marginal="gamma",
+        return_info=True,
+        return_realizations=True,
+    )
+    out = (np.asarray(model, np.float64), np.asarray(mean, np.float64), np.asarray(se, np.float64))
+    if return_info:
+        return out[0], np.asarray(var, np.float64), out[1], out[2], info
+    return out
+
+
+def _region_stats(model: Img, var: Img, reals: Img, mask: np.ndarray) -> dict[str, float]:
+    n = int(mask.sum())
+    m = float(model[mask].mean())
+    m_se = float(np.sqrt(var[mask].sum()) / n)
+    per = reals[:, mask].reshape(len(reals), -1).mean(axis=1)
+    e = float(per.mean())
+    e_se = float(per.std(ddof=1) / np.sqrt(len(per))) if len(per) > 1 else float("nan")
+    return {"pixels": n, "model": m, "model_se": m_se, "ensemble": e, "ensemble_se": e_se}
+
+
+def pink_ensemble_study(
+    scene: str | Any,
+    *,
+    res: int = 64,
+    realizations: int = 64,
+    resolution: int = 64,
+    spp: int = 16,
+    model_spp: int = 256,
+    seed: int = 0,
+    padding: float | None = None,
+) -> dict[str, Any]:
+    """Model vs exponential vs calibrated ensemble on the pink cube scene
+    (:data:`PINK_DEFINES`), over two regions fixed by an independent pilot
+    pair of renders: ``brighter`` (the model is brighter than the
+    exponential by more than a quarter of the 99th percentile of the pilot
+    difference: light through the cube, its shadow) and ``darker`` (the
+    reverse: the cube's lit face). Region means with standard errors: the
+    renders' from their per-pixel variance, the ensemble's from its
+    per-realization region means. Also the grid's exact line-average
+    variance against the model's (``fgf.ensemble``'s report)."""
+    import fgf
+
+    base = {"res": str(res)}
+    pink = dict(base, **PINK_DEFINES)
+    expo_d = dict(base, **EXPONENTIAL_DEFINES)
+    # Pilot renders (independent seeds) fix the regions.
+    pm = fgf.render(scene, spp=max(16, model_spp // 4), seed=seed + 7001, defines=pink, progress=False)
+    pe = fgf.render(scene, spp=max(16, model_spp // 4), seed=seed + 7002, defines=expo_d, progress=False)
+    dpil = (np.asarray(pm, np.float64) - np.asarray(pe, np.float64)).mean(axis=2)
+    thr = 0.25 * float(np.percentile(np.abs(dpil), 99))
+    masks = {"brighter": dpil > thr, "darker": dpil < -thr, "image": np.ones_like(dpil, dtype=bool)}
+    model, var, mean, se, info = pink_ensemble_comparison(
+        scene,
+        defines=pink,
+        realizations=realizations,
+        resolution=resolution,
+        spp=spp,
+        model_spp=model_spp,
+        seed=seed,
+        padding=padding,
+        return_info=True,
+    )
+    expo, expo_var = fgf.render(scene, spp=model_spp, seed=seed + 2, defines=expo_d, progress=False, return_variance=True)
+    reals = np.asarray(info["realizations"], np.float64).mean(axis=3)
+    model_g, var_g = model.mean(axis=2), var.mean(axis=2) / 3.0
+    expo_g, expo_var_g = np.asarray(expo, np.float64).mean(axis=2), np.asarray(expo_var, np.float64).mean(axis=2) / 3.0
+    out: dict[str, Any] = {
+        "scene_defines": pink,
+        "realizations": int(info["realizations_done"]),
+        "grid_resolution": resolution,
+        "spp_per_realization": spp,
+        "model_spp": model_spp,
+        "regions": {},
+    }
+    for name, mask in masks.items():
+        st = _region_stats(model_g, var_g, reals, mask)
+        st["exponential"] = float(expo_g[mask].mean())
+        st["exponential_se"] = float(np.sqrt(expo_var_g[mask].sum()) / mask.sum())
+        st["model_minus_exponential"] = st["model"] - st["exponential"]
+        st["model_minus_ensemble"] = st["model"] - st["ensemble"]
+        st["model_minus_ensemble_se"] = float(np.hypot(st["model_se"], st["ensemble_se"]))
+        st["exponential_minus_ensemble"] = st["exponential"] - st["ensemble"]
+        out["regions"][name] = st
+    med = info["media"][0]
+    ratios = [g / t for g, t in zip(med["grid_variances"], med["model_variances"])]
+    out["medium"] = {
+        k: med[k]
+        for k in ("shape", "padded_shape", "marginal", "hurst_field", "alpha_voxel", "mean_sigma_t", "model_mean_sigma_t", "lengths")
+    }
+    out["medium"]["variance_ratio"] = ratios
+    out["images"] = {"model": model, "ensemble": mean, "ensemble_se": se, "exponential": np.asarray(expo, np.float64)}
+    return out
+
+
 def steps(quick: bool) -> int:
     return 2 * len(ENSEMBLE_CASES)
 

@@ -106,6 +106,10 @@ pub struct EnsembleOptions {
     /// Periodic synthesis domain per axis, in grid sides (≥ 1).
     pub padding: f64,
     pub marginal: Marginal,
+    /// Keep every realization's image in [`EnsembleOutput::realization_images`]
+    /// (for standard errors of region means, which the per-pixel ones do
+    /// not give: one realization moves many pixels together).
+    pub keep_realizations: bool,
 }
 
 impl Default for EnsembleOptions {
@@ -117,6 +121,7 @@ impl Default for EnsembleOptions {
             seed: 0,
             padding: DEFAULT_PADDING,
             marginal: Marginal::Auto,
+            keep_realizations: false,
         }
     }
 }
@@ -179,6 +184,9 @@ pub struct EnsembleOutput {
     pub realizations_requested: u32,
     pub spp: u32,
     pub media: Vec<MediumReport>,
+    /// Each realization's image, in index order (empty unless
+    /// [`EnsembleOptions::keep_realizations`]).
+    pub realization_images: Vec<Vec<f32>>,
 }
 
 /// Errors of [`ensemble`]: the renderer's, and cancellation with the
@@ -261,6 +269,8 @@ pub struct Accumulator {
     media: Vec<MediumStats>,
     done: u32,
     spp: u32,
+    keep: bool,
+    images: Vec<Vec<f32>>,
 }
 
 impl Accumulator {
@@ -272,6 +282,8 @@ impl Accumulator {
             media: vec![MediumStats::default(); prep.plans.len()],
             done: 0,
             spp: prep.opts.spp.unwrap_or(prep.scene.sensor.spp),
+            keep: prep.opts.keep_realizations,
+            images: Vec::new(),
         }
     }
 
@@ -292,6 +304,9 @@ impl Accumulator {
         }
         self.spp = r.spp;
         self.done += 1;
+        if self.keep {
+            self.images.push(r.image.clone());
+        }
     }
 
     pub fn finish(&self, prep: &Prepared) -> EnsembleOutput {
@@ -330,6 +345,7 @@ impl Accumulator {
             realizations_requested: prep.opts.realizations,
             spp: self.spp,
             media,
+            realization_images: self.images.clone(),
         }
     }
 }
