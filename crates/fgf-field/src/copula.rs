@@ -444,21 +444,32 @@ mod tests {
 
     /// The transfer against Monte Carlo: the copula of a small pink grid,
     /// line-average variances by the spectral sum through `T` against the
-    /// mean over 150 fields (SE from the spread of per-field estimates,
+    /// mean over the fields (SE from the spread of per-field estimates,
     /// tolerance 4.5 SE).
     #[test]
     fn copula_line_variance_matches_monte_carlo() {
-        let mut p = SynthParams::new(&[16, 16, 16], -0.3);
+        copula_mc(-0.3, 0.3, 150);
+    }
+
+    /// The calibration uses `H_Z > 0` (periodic, unanchored): same check.
+    #[test]
+    fn copula_line_variance_matches_monte_carlo_positive_hurst() {
+        copula_mc(0.25, 0.3, 300);
+    }
+
+    fn copula_mc(hurst: f64, alpha: f64, fields: u64) {
+        let mut p = SynthParams::new(&[16, 16, 16], hurst);
+        p.anchor = crate::Anchor::None;
         p.spacing = 1.0 / 16.0;
         p.padding = Some(4.0);
         let cov = axis_covariance(&p).unwrap();
         let rho: Vec<f64> = cov.iter().map(|c| c / cov[0]).collect();
-        let copula = GammaCopula::new(0.3).unwrap();
+        let copula = GammaCopula::new(alpha).unwrap();
         let lengths = [1usize, 4, 16];
         let want = copula_line_variances(&copula, &rho, &lengths, 1.0);
         let mut per: Vec<Vec<f64>> = vec![Vec::new(); lengths.len()];
         let sd = cov[0].sqrt();
-        for r in 0..150 {
+        for r in 0..fields {
             p.seed = 77 + r;
             let f = synthesize(&p, &fgf_core::NoProgress).unwrap();
             let x: Vec<f64> = f
@@ -480,7 +491,7 @@ mod tests {
             let se = (var / n).sqrt();
             assert!(
                 (mean - want[k]).abs() < 4.5 * se,
-                "m = {m}: MC {mean} ± {se} vs transfer {}",
+                "H {hurst} m = {m}: MC {mean} ± {se} vs transfer {}",
                 want[k]
             );
         }
