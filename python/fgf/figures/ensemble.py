@@ -154,6 +154,21 @@ def pink_ensemble_study(
         return_info=True,
     )
     expo, expo_var = fgf.render(scene, spp=model_spp, seed=seed + 2, defines=expo_d, progress=False, return_variance=True)
+    # The model under the reciprocal kernel, and with S_w scaled to the
+    # smallest and largest grid/model variance ratio of the calibration
+    # (how far the residual mismatch alone could move the model).
+    med = info["media"][0]
+    ratios = [g / t for g, t in zip(med["grid_variances"], med["model_variances"])]
+    sw = float(PINK_DEFINES["sw"])
+    variants = {
+        "reciprocal": dict(pink, kernel="reciprocal"),
+        "sw_low": dict(pink, sw=repr(sw * min(ratios))),
+        "sw_high": dict(pink, sw=repr(sw * max(ratios))),
+    }
+    variant_imgs = {
+        k: fgf.render(scene, spp=model_spp, seed=seed + 3 + i, defines=d, progress=False, return_variance=True)
+        for i, (k, d) in enumerate(variants.items())
+    }
     reals = np.asarray(info["realizations"], np.float64).mean(axis=3)
     model_g, var_g = model.mean(axis=2), var.mean(axis=2) / 3.0
     expo_g, expo_var_g = np.asarray(expo, np.float64).mean(axis=2), np.asarray(expo_var, np.float64).mean(axis=2) / 3.0
@@ -173,9 +188,11 @@ def pink_ensemble_study(
         st["model_minus_ensemble"] = st["model"] - st["ensemble"]
         st["model_minus_ensemble_se"] = float(np.hypot(st["model_se"], st["ensemble_se"]))
         st["exponential_minus_ensemble"] = st["exponential"] - st["ensemble"]
+        for k, (img, v) in variant_imgs.items():
+            g, vg = np.asarray(img, np.float64).mean(axis=2), np.asarray(v, np.float64).mean(axis=2) / 3.0
+            st[f"model_{k}"] = float(g[mask].mean())
+            st[f"model_{k}_se"] = float(np.sqrt(vg[mask].sum()) / mask.sum())
         out["regions"][name] = st
-    med = info["media"][0]
-    ratios = [g / t for g, t in zip(med["grid_variances"], med["model_variances"])]
     out["medium"] = {
         k: med[k]
         for k in ("shape", "padded_shape", "marginal", "hurst_field", "alpha_voxel", "mean_sigma_t", "model_mean_sigma_t", "lengths")
