@@ -342,10 +342,17 @@ pub fn calibrate_gamma(
             / target.len() as f64
     };
     let ln_ref = (sigma_m * sigma_m / target[0]).ln();
-    let (a_lo, a_hi) = ((ln_ref - 3.0).max(1e-3f64.ln()), (ln_ref + 3.0).min(1e5f64.ln()));
+    let (a_lo, a_hi) = (
+        (ln_ref - 3.0).max(1e-3f64.ln()),
+        (ln_ref + 3.0).min(1e5f64.ln()),
+    );
+    // A target beyond the copula's range pins α to the nearest bound.
+    let a_lo = a_lo.min(a_hi);
+    let a_hi = a_hi.max(a_lo);
+    let shape = |la: f64| la.exp().clamp(1e-3, 1e5);
     let mut err: Option<ParamError> = None;
     let inner = |rho: &[f64], err: &mut Option<ParamError>| -> (f64, f64) {
-        golden(a_lo, a_hi, 15, |la| match GammaCopula::new(la.exp()) {
+        golden(a_lo, a_hi, 15, |la| match GammaCopula::new(shape(la)) {
             Ok(c) => loss(&copula_line_variances(&c, rho, lengths, sigma_m)),
             Err(e) => {
                 *err = Some(e);
@@ -369,7 +376,7 @@ pub fn calibrate_gamma(
     if let Some(e) = e2 {
         return Err(e);
     }
-    let copula = GammaCopula::new(la.exp())?;
+    let copula = GammaCopula::new(shape(la))?;
     let achieved = copula_line_variances(&copula, &rho, lengths, sigma_m);
     let h_best = gauss_hurst(h_best);
     let mut p = base.clone();
@@ -430,7 +437,11 @@ mod tests {
     fn copula_moments_and_transfer() {
         for a in [0.2, 1.0, 10.0] {
             let c = GammaCopula::new(a).unwrap();
-            assert!((c.variance() * a - 1.0).abs() < 2e-3, "a {a}: var {}", c.variance());
+            assert!(
+                (c.variance() * a - 1.0).abs() < 2e-3,
+                "a {a}: var {}",
+                c.variance()
+            );
             assert!((c.covariance(1.0) - c.variance()).abs() < 1e-12);
             assert!(c.covariance(0.0).abs() < 1e-15);
             // T(r) <= r var for r in (0, 1) (all Mehler coefficients >= 0).
@@ -438,7 +449,11 @@ mod tests {
                 let t = c.covariance(r);
                 assert!(t > 0.0 && t <= r * c.variance() * (1.0 + 1e-12), "{a} {r}");
             }
-            assert!(c.hermite_remainder() < 1e-3, "{a}: {}", c.hermite_remainder());
+            assert!(
+                c.hermite_remainder() < 1e-3,
+                "{a}: {}",
+                c.hermite_remainder()
+            );
         }
     }
 

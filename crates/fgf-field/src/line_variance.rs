@@ -79,7 +79,16 @@ pub fn axis_covariance(params: &SynthParams) -> Result<Vec<f64>, ParamError> {
     // Full x spectrum as the half spectrum with weights 1 (0, Nyquist) or 2.
     let half: Vec<(usize, f64)> = (0..=nx / 2)
         .filter(|&i| xs[i].1)
-        .map(|i| (i, if i == 0 || (nx % 2 == 0 && i == nx / 2) { 1.0 } else { 2.0 }))
+        .map(|i| {
+            (
+                i,
+                if i == 0 || (nx % 2 == 0 && i == nx / 2) {
+                    1.0
+                } else {
+                    2.0
+                },
+            )
+        })
         .collect();
     let spec: Vec<f64> = half
         .par_iter()
@@ -111,7 +120,11 @@ pub fn axis_covariance(params: &SynthParams) -> Result<Vec<f64>, ParamError> {
 /// Variance of the mean of `m` consecutive samples of a stationary sequence
 /// with covariance `cov` (`1 <= m <= cov.len()`).
 pub fn segment_variance(cov: &[f64], m: usize) -> f64 {
-    assert!(m >= 1 && m <= cov.len(), "segment of {m} samples on {}", cov.len());
+    assert!(
+        m >= 1 && m <= cov.len(),
+        "segment of {m} samples on {}",
+        cov.len()
+    );
     let mut acc = m as f64 * cov[0];
     for (j, &c) in cov.iter().enumerate().take(m).skip(1) {
         acc += 2.0 * (m - j) as f64 * c;
@@ -173,8 +186,8 @@ mod tests {
             p.seed = 1000 + r;
             let f = synthesize(&p, &fgf_core::NoProgress).unwrap();
             let u = f.data.to_f32();
-            let lv = crate::estimators::line_average_second_moment(&u, &p.shape, 2, &lengths)
-                .unwrap();
+            let lv =
+                crate::estimators::line_average_second_moment(&u, &p.shape, 2, &lengths).unwrap();
             for (k, v) in lv.into_iter().enumerate() {
                 per[k].push(v);
             }
