@@ -24,13 +24,16 @@ errors is :func:`pink_ensemble_study`.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from ._common import Context, Figure, GroupResult, Unavailable, need
 from .comparisons import _rows_figure, mean_relative_error
 from .renders import CUBE_DIAGONAL, SCENE, defines_for, image_stats, render, settings, sw_for
+
+if TYPE_CHECKING:
+    from ..ensemble import Marginal
 
 TITLE = "5b. Uncorrelated vs correlated media: model vs explicit realizations"
 
@@ -67,6 +70,7 @@ def pink_ensemble_comparison(
     seed: int = 0,
     padding: float | None = None,
     return_info: bool = False,
+    marginal: Marginal = "gamma",
 ) -> Any:
     """The fgf model render of a pink-noise scene and the calibrated
     ensemble's mean and per-pixel standard error (``fgf.ensemble`` with
@@ -91,7 +95,7 @@ def pink_ensemble_comparison(
         defines=d,
         progress=False,
         padding=padding,
-        marginal="gamma",
+        marginal=marginal,
         return_info=True,
         return_realizations=True,
     )
@@ -121,6 +125,7 @@ def pink_ensemble_study(
     model_spp: int = 256,
     seed: int = 0,
     padding: float | None = None,
+    marginal: Marginal = "gamma",
 ) -> dict[str, Any]:
     """Model vs exponential vs calibrated ensemble on the pink cube scene
     (:data:`PINK_DEFINES`), over two regions fixed by an independent pilot
@@ -152,6 +157,7 @@ def pink_ensemble_study(
         seed=seed,
         padding=padding,
         return_info=True,
+        marginal=marginal,
     )
     expo, expo_var = fgf.render(scene, spp=model_spp, seed=seed + 2, defines=expo_d, progress=False, return_variance=True)
     # The model under the reciprocal kernel, and with S_w scaled to the
@@ -195,7 +201,7 @@ def pink_ensemble_study(
         out["regions"][name] = st
     out["medium"] = {
         k: med[k]
-        for k in ("shape", "padded_shape", "marginal", "hurst_field", "alpha_voxel", "mean_sigma_t", "model_mean_sigma_t", "lengths")
+        for k in ("shape", "padded_shape", "marginal", "hurst_field", "alpha_voxel", "mean_sigma_t", "model_mean_sigma_t", "lengths", "clamped_fraction")
     }
     out["medium"]["variance_ratio"] = ratios
     out["images"] = {"model": model, "ensemble": mean, "ensemble_se": se, "exponential": np.asarray(expo, np.float64)}
