@@ -4,7 +4,7 @@
 use crate::errors::ParameterError;
 use crate::progress::run_job;
 use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
-use fgf_render::ensemble::{ensemble, total_samples, EnsembleError, EnsembleOptions};
+use fgf_render::ensemble::{ensemble_from, total_samples, EnsembleError, EnsembleOptions};
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -21,9 +21,10 @@ type EnsembleResult<'py> = (
 /// the scene's `fgf` media. Returns `(mean, stderr, info, interrupted)`
 /// where `info` is a dict (`realizations_done`, `spp`, and `media`: one dict
 /// per medium with its grid and variance report); the typed wrapper is
-/// `fgf.ensemble`.
+/// `fgf.ensemble`. `first` selects the realizations
+/// `first..first + realizations` (a distributed ensemble renders each apart).
 #[pyfunction]
-#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None))]
+#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, first=0))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble_scene<'py>(
     py: Python<'py>,
@@ -35,6 +36,7 @@ fn ensemble_scene<'py>(
     threads: Option<usize>,
     defines: Option<Vec<(String, String)>>,
     progress: Option<Bound<'py, PyAny>>,
+    first: u32,
 ) -> PyResult<EnsembleResult<'py>> {
     if realizations == 0 {
         return Err(ParameterError::new_err(
@@ -58,7 +60,7 @@ fn ensemble_scene<'py>(
     let total = total_samples(&desc, &opts);
     let source = scene.display().to_string();
     let job = run_job(py, total, "ensemble", progress.as_ref(), |counter| {
-        in_pool(threads, || ensemble(&desc, &opts, counter))
+        in_pool(threads, || ensemble_from(&desc, &opts, first, counter))
     })?;
     // A cancelled ensemble still returns the realizations finished.
     let (out, cancelled) = match job.value {

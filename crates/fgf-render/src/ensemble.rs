@@ -283,6 +283,19 @@ pub fn ensemble(
     opts: &EnsembleOptions,
     progress: &dyn Progress,
 ) -> Result<EnsembleOutput, EnsembleError> {
+    ensemble_from(scene, opts, 0, progress)
+}
+
+/// [`ensemble`] of the realizations `first..first + opts.realizations`
+/// (realization `r` is a fixed function of `(seed, r)`), so that a
+/// distributed ensemble can render each realization apart and merge them
+/// in index order.
+pub fn ensemble_from(
+    scene: &SceneDesc,
+    opts: &EnsembleOptions,
+    first: u32,
+    progress: &dyn Progress,
+) -> Result<EnsembleOutput, EnsembleError> {
     scene.validate().map_err(RenderError::from)?;
     if opts.realizations == 0 {
         return Err(RenderError::InvalidOption(
@@ -313,7 +326,7 @@ pub fn ensemble(
     let mut interrupted = false;
     let mut spp_done = opts.spp.unwrap_or(scene.sensor.spp);
     let cancel_only = CancelOnly(progress);
-    for r in 0..opts.realizations {
+    for r in first..first.saturating_add(opts.realizations) {
         if progress.cancelled() {
             interrupted = true;
             break;
