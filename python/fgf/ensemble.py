@@ -47,6 +47,9 @@ def ensemble(
     defines: Defines = None,
     progress: Progress = True,
     return_info: Literal[False] = False,
+    *,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image]: ...
 @overload
 def ensemble(
@@ -60,6 +63,8 @@ def ensemble(
     progress: Progress = True,
     *,
     return_info: Literal[True],
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image, dict[str, Any]]: ...
 @overload
 def ensemble(
@@ -72,6 +77,9 @@ def ensemble(
     defines: Defines = None,
     progress: Progress = True,
     return_info: bool = False,
+    *,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]: ...
 def ensemble(
     scene: str | os.PathLike[str],
@@ -83,6 +91,9 @@ def ensemble(
     defines: Defines = None,
     progress: Progress = True,
     return_info: bool = False,
+    *,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]:
     """Average classical renders of explicit realizations of the scene's ``fgf`` media.
 
@@ -118,6 +129,13 @@ def ensemble(
         ``spacing``, ``bbox``, ``sw_3d``, ``clamped_fraction`` and the
         line-average variance over ``variance_length`` measured on the grids
         (``realized_variance``) and of the model (``continuum_variance``).
+    client : dask.distributed.Client, optional
+        Render one realization per Dask task on the client's workers, merged
+        in index order: the same bits as without (``fgf.cluster``,
+        ``docs/cluster.md``).
+    checkpoint : path, optional
+        Save the finished realizations there as they arrive; a rerun with the
+        same arguments resumes from them.
 
     Returns
     -------
@@ -137,6 +155,26 @@ def ensemble(
     from ._progress import check_seed, progress_sink
     from .render import _defines_list
 
+    if client is not None or checkpoint is not None:
+        from . import cluster
+
+        run = cluster.ensemble(
+            scene,
+            int(realizations),
+            resolution=resolution,
+            spp=spp,
+            seed=check_seed(seed),
+            threads=threads,
+            defines=_defines_list(defines),
+            progress=progress,
+            client=client,
+            checkpoint=checkpoint,
+        )
+        if run.lost is not None:
+            raise cluster.ClusterError(run.lost)
+        if run.interrupted:
+            raise KeyboardInterrupt(f"ensemble interrupted after {run.info['realizations_done']} realizations")
+        return (run.mean, run.stderr, run.info) if return_info else (run.mean, run.stderr)
     with progress_sink(progress, "ensemble") as sink:
         mean, stderr, info, interrupted = _core.ensemble_scene(
             os.fspath(scene),

@@ -3,6 +3,7 @@
     fgf ensemble scene.xml --realizations N -o mean.exr [--stderr se.exr]
                  [--resolution R] [--spp S] [--seed S] [--threads T]
                  [-D name=value]... [--png mean.png] [--quiet]
+                 [--cluster local[:N]|tcp://host:port] [--checkpoint FILE]
 
 Each ``fgf`` medium is replaced by explicit grids
 ``sigma_t = max(0, sigma_m rho + sigma_u)`` (``sigma_u`` a fractional Gaussian
@@ -11,6 +12,9 @@ delta/ratio tracking, and the mean image and its per-pixel standard error
 are written. The grid resolution, the fraction of clamped voxels and the
 realised against continuum line-average variance are printed. Ctrl-C writes
 the average of the realizations finished so far (exit code 130).
+``--cluster`` renders one realization per Dask task and merges them in
+index order (the same bits as without it); ``--checkpoint`` saves finished
+realizations as they arrive and a rerun resumes (docs/cluster.md).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import argparse
 import sys
 import time
 
+from ._cluster_args import add_cluster_options, check_cluster_options, client_for, summary_lost, wants_chunks
 from ._scene_args import add_scene_options, check_scene_options
 
 
@@ -38,6 +43,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--spp", type=int, default=None, help="samples per pixel per realization (default: the scene's)")
     p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     add_scene_options(p)
+    add_cluster_options(p, chunks=False)
     p.set_defaults(func=run)
 
 
@@ -50,19 +56,42 @@ def run(args: argparse.Namespace) -> int:
     if args.resolution is not None and args.resolution < 2:
         raise ParameterError(f"--resolution {args.resolution}: need at least 2 voxels along the longest side")
     out, png = check_scene_options(args, {"--stderr": args.stderr})
+    check_cluster_options(args)
     t0 = time.perf_counter()
-    mean, se, info, interrupted = _core.ensemble_scene(
-        args.scene,
-        args.realizations,
-        resolution=args.resolution,
-        spp=args.spp,
-        seed=args.seed,
-        threads=args.threads,
-        defines=_defines_list(args.defines),
-        progress=None if args.quiet else "bar",
-    )
+    lost = None
+    if wants_chunks(args):
+        from .. import cluster
+
+        with client_for(args) as client:
+            run_ = cluster.ensemble(
+                args.scene,
+                args.realizations,
+                resolution=args.resolution,
+                spp=args.spp,
+                seed=args.seed,
+                threads=args.threads,
+                defines=_defines_list(args.defines),
+                progress=False if args.quiet else "bar",
+                client=client,
+                checkpoint=args.checkpoint,
+            )
+        mean, se, info, interrupted, lost = run_.mean, run_.stderr, run_.info, run_.interrupted, run_.lost
+    else:
+        mean, se, info, interrupted = _core.ensemble_scene(
+            args.scene,
+            args.realizations,
+            resolution=args.resolution,
+            spp=args.spp,
+            seed=args.seed,
+            threads=args.threads,
+            defines=_defines_list(args.defines),
+            progress=None if args.quiet else "bar",
+        )
     elapsed = time.perf_counter() - t0
     done = info["realizations_done"]
+    if done == 0 and lost is not None:
+        print(f"fgf ensemble: error: {lost}; no realization had finished, nothing written", file=sys.stderr)
+        return 2
     if done == 0:
         print("fgf ensemble: interrupted before the first realization finished; nothing written", file=sys.stderr)
         return 130
@@ -82,6 +111,9 @@ def run(args: argparse.Namespace) -> int:
                 f"vs continuum {m['continuum_variance']:.4g} ({100 * ratio:.1f}%)",
                 file=sys.stderr,
             )
+    code = summary_lost("ensemble", lost, written, f"the average of the {done} realizations")
+    if code is not None:
+        return int(code)
     if interrupted:
         print(
             f"fgf ensemble: interrupted; wrote the average of {done} of {args.realizations} realizations to {written}",

@@ -197,7 +197,7 @@ def _lost(address: str, e: BaseException) -> str:
 
 
 def _run(
-    client: Optional["Client"],
+    client: Any,
     jobs: Sequence[tuple[Any, ...]],
     task: Callable[..., Any],
     shipped: Any,
@@ -407,6 +407,7 @@ def merge_realizations(reals: Sequence[Realization], requested: int) -> tuple[F3
     nf = float(n)
     m = s / nf
     mean = m.astype(np.float32)
+    stderr: F32
     if n < 2:
         stderr = np.full(mean.shape, np.nan, dtype=np.float32)
     else:
@@ -478,7 +479,7 @@ def ensemble(
     saver = _Saver(ckpt, make)
 
     def local(index: int, *_: Any) -> Optional[Realization]:
-        mean, _, info, interrupted = _core.ensemble_scene(
+        mean, _se, info, interrupted = _core.ensemble_scene(
             path,
             1,
             resolution=resolution,

@@ -86,7 +86,7 @@ def save(path: str | os.PathLike[str], meta: dict[str, Any], arrays: dict[str, n
 
     def write(fh: Any) -> None:
         buf = io.BytesIO()
-        np.savez(buf, __meta__=header, **arrays)
+        np.savez(buf, **{"__meta__": header, **arrays})  # type: ignore[arg-type]
         fh.write(buf.getvalue())
 
     _atomic.write_atomic(path, write)
