@@ -42,6 +42,7 @@ GROUP_FILES = {
     "transmittance": ["transmittance_models.png", "transmittance_vs_realizations.png"],
     "renders": ["renders.png"],
     "comparisons": ["comparison_kernels.png", "comparison_bitterli.png"],
+    "truth": ["comparison_truth.png"],
     "ensemble": ["comparison_ensemble.png"],
 }
 

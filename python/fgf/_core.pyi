@@ -48,6 +48,9 @@ __all__ = [
     "render_range",
     "film_merge",
     "film_finish",
+    "truth_plan",
+    "render_truth_node",
+    "TruthBar",
 ]
 
 _F64Array: TypeAlias = npt.NDArray[np.float64]
@@ -258,6 +261,38 @@ def ensemble_scene(
     first: int = 0,
 ) -> tuple[_F32Array, _F32Array, dict[str, Any], bool]:
     """Ensemble of explicit realizations: ``(mean, stderr, info, interrupted)``, images ``(H, W, 3)`` float32."""
+
+# --- truth (constant-alpha media) -----------------------------------------------
+
+def truth_plan(
+    scene: str,
+    nodes: int | None = None,
+    defines: Sequence[tuple[str, str]] | None = None,
+) -> dict[str, Any]:
+    """The truth quadrature: ``alpha``, ``x``, ``weights``, ``tau_max``, ``auto_nodes``,
+    ``closed_form_error``, ``media``, ``width``, ``height``, ``spp``."""
+
+def render_truth_node(
+    scene: str,
+    node: int,
+    nodes: int | None = None,
+    spp: int | None = None,
+    seed: int = 0,
+    threads: int | None = None,
+    defines: Sequence[tuple[str, str]] | None = None,
+    progress: _Progress = None,
+    return_variance: bool = False,
+) -> tuple[_F32Array | None, _F32Array | None, bool]:
+    """One node's classical render: ``(image or None, variance or None, interrupted)``."""
+
+@final
+class TruthBar:
+    """An indicatif bar on stderr that several calls advance."""
+
+    def __init__(self, total: int, label: str = "truth") -> None: ...
+    def update(self, n: int) -> None: ...
+    def set_message(self, msg: str) -> None: ...
+    def close(self) -> None: ...
 
 # --- io: OpenVDB ---
 def write_vdb(

@@ -12,6 +12,7 @@ mod field;
 mod progress;
 mod render;
 mod transmittance;
+mod truth;
 mod vdb;
 
 pub use errors::{FgfError, ParameterError, SceneError};
@@ -27,6 +28,7 @@ fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     field::register(m)?;
     render::register(m)?;
     ensemble::register(m)?;
+    truth::register(m)?;
     vdb::register(m)?;
     Ok(())
 }

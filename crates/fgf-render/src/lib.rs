@@ -16,6 +16,8 @@
 //!   BVH), [`ray`], [`bsdf`], [`emitter`], [`phase`], [`camera`],
 //!   [`spectrum`] (the colour type), [`math`].
 //! * [`ensemble`]: ground truth from explicit realizations of `fgf` media.
+//! * [`truth`]: exact ground truth for constant-α media by quadrature over
+//!   the level of homogeneous realizations.
 
 // `!(x > 0.0)` is used on purpose: it is true for NaN, which must take the
 // degenerate branch (as in fgf-core); `partial_cmp` would only obscure that.
@@ -35,6 +37,7 @@ pub mod phase;
 pub mod ray;
 pub mod render;
 pub mod spectrum;
+pub mod truth;
 pub mod world;
 
 pub use error::RenderError;

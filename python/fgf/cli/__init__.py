@@ -15,7 +15,7 @@ import importlib
 import sys
 
 # Subcommand modules, in the order ``fgf --help`` lists them.
-COMMANDS = ["transmittance", "field", "render", "ensemble", "figures"]
+COMMANDS = ["transmittance", "field", "render", "ensemble", "truth", "figures"]
 
 
 def build_parser() -> argparse.ArgumentParser:
