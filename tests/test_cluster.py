@@ -31,6 +31,7 @@ ROOT = Path(__file__).resolve().parents[1]
 SCENE = ROOT / "scenes" / "reference" / "cube-heterogeneous.xml"
 SMALL = [("res", "12")]
 PINK = ROOT / "scenes" / "fgf-cube-pink.xml"
+KFBM = ROOT / "scenes" / "fgf-cube-2fbm.xml"
 
 
 @pytest.fixture(scope="module")
@@ -84,6 +85,17 @@ def test_cluster_ensemble_is_bit_identical(client, realizations):
     for m, c in zip(info["media"], cinfo["media"]):
         assert m["realized_variance"] == c["realized_variance"]
         assert m["clamped_fraction"] == pytest.approx(c["clamped_fraction"], rel=1e-12, abs=1e-15)
+
+
+@pytest.mark.parametrize("nodes", [2, 3])
+def test_cluster_truth_is_bit_identical(client, nodes, tmp_path):
+    args = dict(spp=2, nodes=nodes, seed=6, defines={"res": 8}, progress=False, return_stderr=True)
+    img, se = fgf.truth(KFBM, **args)
+    cimg, cse = fgf.truth(KFBM, client=client, checkpoint=tmp_path / "truth.ckpt", **args)
+    assert np.array_equal(img, cimg) and np.array_equal(se, cse)
+    # Resumed entirely from the checkpoint: the same bits again.
+    rimg, rse = fgf.truth(KFBM, checkpoint=tmp_path / "truth.ckpt", **args)
+    assert np.array_equal(img, rimg) and np.array_equal(se, rse)
 
 
 def test_checkpoint_interrupted_and_resumed_is_identical(tmp_path):

@@ -6,7 +6,8 @@ the exact fixed-point sums of its samples (:class:`FilmSums`,
 addition, so the image is bit-identical to a single-process render with the
 same seed and spp for any chunk size, any number of workers and any order in
 which chunks finish. An ensemble maps over realization indices and merges
-them in index order. ``docs/cluster.md`` is the user guide.
+them in index order; a truth maps over its quadrature nodes, which
+``fgf.truth`` sums in node order. ``docs/cluster.md`` is the user guide.
 
 >>> from fgf import cluster                                          # doctest: +SKIP
 >>> with cluster.open_client("local:2") as client:                   # doctest: +SKIP
@@ -40,7 +41,7 @@ from .._progress import Progress
 from . import _film
 from ._film import FilmSums, missing
 from ._ship import ScenePayload, scene_files
-from ._tasks import Realization, TaskError, ensemble_task, render_task
+from ._tasks import Node, Realization, TaskError, ensemble_task, render_task, truth_task
 
 if TYPE_CHECKING:
     from distributed import Client
@@ -55,6 +56,8 @@ __all__ = [
     "ensemble",
     "RenderRun",
     "EnsembleRun",
+    "truth_nodes",
+    "TruthRun",
     "scene_files",
 ]
 
@@ -517,3 +520,86 @@ def ensemble(
     return EnsembleRun(
         mean, stderr, info, interrupted or len(kept) < realizations, lost, resumed, sorted(x.index for x in kept)
     )
+
+
+@dataclass
+class TruthRun:
+    """What :func:`truth_nodes` returns: the node renders finished, by index."""
+
+    nodes: dict[int, Node]
+    interrupted: bool = False
+    lost: Optional[str] = None
+    resumed: int = 0
+
+
+def truth_nodes(
+    scene: Union[str, os.PathLike[str]],
+    nodes: int,
+    spp: Optional[int] = None,
+    seed: int = 0,
+    threads: Optional[int] = None,
+    defines: Sequence[tuple[str, str]] = (),
+    progress: Union[Progress, str] = True,
+    return_variance: bool = False,
+    client: Optional["Client"] = None,
+    checkpoint: Optional[Union[str, os.PathLike[str]]] = None,
+) -> TruthRun:
+    """The classical renders of the ``nodes`` truth nodes of ``scene``, one
+    Dask task per node (or here, with ``threads``); ``fgf.truth`` sums them
+    in node order, so the truth has the same bits as without a client.
+    ``checkpoint`` saves finished nodes as they arrive and resumes from them."""
+    defines = list(defines)
+    path = os.fspath(scene)
+    payload = ScenePayload.from_file(path, defines)
+    meta = {
+        "kind": "truth",
+        "scene_digest": payload.digest,
+        "seed": seed,
+        "spp": spp,
+        "nodes": nodes,
+        "variance": return_variance,
+    }
+    done: dict[int, Node] = {}
+    ckpt = None if checkpoint is None else os.fspath(checkpoint)
+    if ckpt is not None and os.path.exists(ckpt):
+        found, arrays = _film.load(ckpt)
+        _film.check_meta(ckpt, found, meta)
+        for key in found.get("done", []):
+            done[int(key)] = Node(int(key), arrays[f"n{key}"], arrays.get(f"v{key}"))
+    resumed = len(done)
+    todo = [(i, nodes, spp, seed, return_variance) for i in range(nodes) if i not in done]
+    prep = _core.prepare_scene(path, defines)
+    per = prep.width * prep.height * (prep.spp if spp is None else spp)
+    bar = _Bar(progress, per * len(todo), "truth")
+
+    def make() -> tuple[dict[str, Any], dict[str, Any]]:
+        arrays: dict[str, Any] = {f"n{i}": x.image for i, x in done.items()}
+        arrays.update({f"v{i}": x.variance for i, x in done.items() if x.variance is not None})
+        return dict(meta, done=sorted(done)), arrays
+
+    saver = _Saver(ckpt, make)
+
+    def local(index: int, *_: Any) -> Optional[Node]:
+        img, var, interrupted = _core.render_truth_node(
+            path, index, nodes=nodes, spp=spp, seed=seed, threads=threads, defines=defines,
+            return_variance=return_variance,
+        )
+        if interrupted or img is None:
+            return None
+        return Node(index, img, var)
+
+    def on_result(x: Optional[Node]) -> bool:
+        if x is None:
+            return False
+        done[x.index] = x
+        bar.add(per)
+        saver.maybe()
+        return True
+
+    try:
+        interrupted, lost = _run(client, todo, truth_task, payload, local, on_result) if todo else (False, None)
+    finally:
+        bar.close()
+    if ckpt is not None and len(done) > resumed:
+        saver.now()
+    return TruthRun(done, interrupted or len(done) < nodes, lost, resumed)

@@ -113,3 +113,35 @@ def ensemble_task(
     if interrupted or info["realizations_done"] < 1:
         return None
     return Realization(index, mean, info)
+
+
+@dataclass
+class Node:
+    """One truth node's classical render (unweighted) and its variance."""
+
+    index: int
+    image: npt.NDArray[np.float32]
+    variance: Optional[npt.NDArray[np.float32]]
+
+
+def truth_task(
+    payload: ScenePayload, index: int, nodes: int, spp: Optional[int], seed: int, variance: bool
+) -> Union[Node, TaskError, None]:
+    """Node ``index`` of the truth of the shipped scene (``None`` if interrupted)."""
+    try:
+        with materialized(payload) as scene:
+            img, var, interrupted = _core.render_truth_node(
+                os.fspath(scene),
+                index,
+                nodes=nodes,
+                spp=spp,
+                seed=seed,
+                threads=worker_threads(),
+                defines=list(payload.defines),
+                return_variance=variance,
+            )
+    except (_core.FgfError, OSError) as e:
+        return _as_task_error(e)
+    if interrupted or img is None:
+        return None
+    return Node(index, img, var)
