@@ -181,7 +181,6 @@ pub fn render(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use crate::film::Fixed;
 
     #[test]
