@@ -6,10 +6,10 @@
 
 use crate::errors::{io_err, ParameterError, SceneError};
 use crate::progress::run_job;
-use fgf_render::{RenderError, RenderOptions};
-use fgf_scene::SceneErrorKind;
 use fgf_render::film::{FilmState, Fixed, FIXED_LIMBS};
 use fgf_render::render::Prepared;
+use fgf_render::{RenderError, RenderOptions};
+use fgf_scene::SceneErrorKind;
 use numpy::{
     PyArray1, PyArrayMethods, PyReadonlyArray3, PyReadonlyArrayDyn, PyReadwriteArrayDyn,
     PyUntypedArrayMethods,

@@ -123,9 +123,9 @@ impl Prepared {
                         let px = &mut row[3 * x..3 * x + 3];
                         for k in first..first + n {
                             let mut s = Sampler::for_sample(pixel_key, k as u64);
-                            let (fx, fy, weight) = self.filter.sample_position(
-                                x as u32, y as u32, w as u32, h as u32, &mut s,
-                            );
+                            let (fx, fy, weight) = self
+                                .filter
+                                .sample_position(x as u32, y as u32, w as u32, h as u32, &mut s);
                             let (ray, t_max) = self.world.camera.generate_ray(fx, fy);
                             let mut l = self.world.li(ray, t_max, &mut s) * weight;
                             // A NaN or infinite sample (a numerical failure, e.g. a
@@ -215,8 +215,14 @@ mod tests {
         let mut big = Fixed::from_f64(f64::powi(2.0, 94)).unwrap();
         assert!(!big.merge(&Fixed::from_f64(f64::powi(2.0, 94)).unwrap()));
         // Below half a unit rounds to zero; half a unit rounds away.
-        assert_eq!(Fixed::from_f64(f64::powi(2.0, -98)).unwrap(), Fixed::default());
+        assert_eq!(
+            Fixed::from_f64(f64::powi(2.0, -98)).unwrap(),
+            Fixed::default()
+        );
         assert_eq!(Fixed::from_f64(f64::powi(2.0, -97)).unwrap().0, [1, 0, 0]);
-        assert_eq!(Fixed::from_f64(-f64::powi(2.0, -96)).unwrap().0, [u64::MAX; 3]);
+        assert_eq!(
+            Fixed::from_f64(-f64::powi(2.0, -96)).unwrap().0,
+            [u64::MAX; 3]
+        );
     }
 }

@@ -61,17 +61,29 @@ def client_for(args: argparse.Namespace) -> Iterator[Optional["Client"]]:
     if args.cluster is None:
         yield None
         return
+    import logging
+
     from ..cluster import open_client
 
+    # The command reports a lost scheduler in one line itself: Dask's own
+    # tracebacks of its reconnection attempts would only bury it.
+    def quiet() -> None:
+        for name in ["distributed", *logging.root.manager.loggerDict]:
+            if name == "distributed" or name.startswith("distributed."):
+                logging.getLogger(name).setLevel(logging.CRITICAL)
+
+    quiet()
     with open_client(args.cluster) as client:
+        quiet()  # loggers created while connecting
         yield client
 
 
-def summary_lost(command: str, lost: Optional[str], written: str, what: str) -> Any:
+def summary_lost(command: str, lost: Optional[str], written: str, what: str, checkpoint: Optional[str] = None) -> Any:
     """Print the one line for a lost cluster; return exit code 2 (or None if not lost)."""
     import sys
 
     if lost is None:
         return None
-    print(f"fgf {command}: error: {lost}; wrote {what} finished to {written}", file=sys.stderr)
+    kept = f" and {checkpoint} (rerun to resume)" if checkpoint else ""
+    print(f"fgf {command}: error: {lost}; wrote {what} finished to {written}{kept}", file=sys.stderr)
     return 2

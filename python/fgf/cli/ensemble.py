@@ -111,7 +111,7 @@ def run(args: argparse.Namespace) -> int:
                 f"vs continuum {m['continuum_variance']:.4g} ({100 * ratio:.1f}%)",
                 file=sys.stderr,
             )
-    code = summary_lost("ensemble", lost, written, f"the average of the {done} realizations")
+    code = summary_lost("ensemble", lost, written, f"the average of the {done} realizations", args.checkpoint)
     if code is not None:
         return int(code)
     if interrupted:

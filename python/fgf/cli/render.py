@@ -90,7 +90,7 @@ def run(args: argparse.Namespace) -> int:
         _core.write_exr(args.variance, var)
     written = ", ".join(str(p) for p in [out, png] + ([args.variance] if var is not None else []))
     h, w = img.shape[:2]
-    code = summary_lost("render", lost, written, f"the image of the {done} samples per pixel")
+    code = summary_lost("render", lost, written, f"the image of the {done} samples per pixel", args.checkpoint)
     if code is not None:
         return int(code)
     if interrupted:

@@ -28,7 +28,9 @@ from __future__ import annotations
 import contextlib
 import logging
 import os
+import signal
 import sys
+import threading
 import time
 from dataclasses import dataclass, field
 from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional, Sequence, Union
@@ -73,6 +75,10 @@ class ClusterError(_core.FgfError):
     """The cluster is unreachable, or was lost during a job."""
 
 
+def _main_thread() -> bool:
+    return threading.current_thread() is threading.main_thread()
+
+
 def _distributed() -> Any:
     try:
         import distributed
@@ -105,13 +111,23 @@ def open_client(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator["Cli
         else:
             n = os.cpu_count() or 1
         distributed = _distributed()
-        cluster = distributed.LocalCluster(
-            n_workers=n,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-            silence_logs=logging.ERROR,
-        )
+        # The worker processes inherit an ignored SIGINT, so that Ctrl-C in a
+        # terminal (sent to the whole process group) reaches only this
+        # process, which cancels the futures and writes what finished.
+        previous = signal.getsignal(signal.SIGINT) if _main_thread() else None
+        if previous is not None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        try:
+            cluster = distributed.LocalCluster(
+                n_workers=n,
+                threads_per_worker=1,
+                processes=True,
+                dashboard_address=None,
+                silence_logs=logging.ERROR,
+            )
+        finally:
+            if previous is not None:
+                signal.signal(signal.SIGINT, previous)
         client = distributed.Client(cluster)
         try:
             yield client
@@ -196,7 +212,10 @@ class _Saver:
 
 def _lost(address: str, e: BaseException) -> str:
     reason = str(e).splitlines()[0] if str(e) else type(e).__name__
-    return f"lost the Dask scheduler or its workers ({type(e).__name__}: {reason})"
+    if "cancelled for reason:" in reason:
+        reason = reason.split("cancelled for reason:", 1)[1].strip().rstrip(".")
+    where = f" at {address}" if address else ""
+    return f"lost the Dask scheduler{where} ({reason})"
 
 
 def _run(
@@ -238,7 +257,7 @@ def _run(
             client.cancel(futures)
         return True, None
     except (OSError, TimeoutError, distributed.client.FutureCancelledError, distributed.comm.CommClosedError) as e:
-        return False, _lost(str(getattr(client, "scheduler", "")), e)
+        return False, _lost(str(getattr(getattr(client, "scheduler", None), "address", "") or ""), e)
     return False, None
 
 
