@@ -87,6 +87,17 @@ def test_cluster_ensemble_is_bit_identical(client, realizations):
         assert m["clamped_fraction"] == pytest.approx(c["clamped_fraction"], rel=1e-12, abs=1e-15)
 
 
+def test_ensemble_checkpoint_resumes_with_more_realizations(tmp_path):
+    args = dict(resolution=8, spp=1, seed=2, defines={"res": 8}, progress=False)
+    ck = tmp_path / "ens.ckpt"
+    fgf.ensemble(PINK, 2, checkpoint=ck, **args)
+    mean, se = fgf.ensemble(PINK, 3, checkpoint=ck, **args)
+    ref_mean, ref_se = fgf.ensemble(PINK, 3, **args)
+    assert np.array_equal(mean, ref_mean) and np.array_equal(se, ref_se)
+    with pytest.raises(fgf.ParameterError, match="different --resolution"):
+        fgf.ensemble(PINK, 3, checkpoint=ck, **dict(args, resolution=10))
+
+
 @pytest.mark.parametrize("nodes", [2, 3])
 def test_cluster_truth_is_bit_identical(client, nodes, tmp_path):
     args = dict(spp=2, nodes=nodes, seed=6, defines={"res": 8}, progress=False, return_stderr=True)
