@@ -210,3 +210,24 @@ def test_worker_killed_mid_render_gives_the_same_image(client):
     img, var = fgf.render(SCENE, spp=24, seed=11, defines={"res": 16}, progress=False, return_variance=True)
     assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
     assert victim not in client.run(os.getpid).values()
+
+
+def test_sample_outside_the_exact_range_is_an_error_not_a_wrong_image(tmp_path):
+    # A sky of radiance 1e28: 8 samples sum past 2^95 ≈ 4e28.
+    scene = tmp_path / "bright.xml"
+    scene.write_text("""<scene version="3.0.0">
+  <integrator type="volpath"><integer name="max_depth" value="2"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="30"/>
+    <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="2"/><integer name="height" value="2"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <emitter type="constant"><rgb name="radiance" value="1e28"/></emitter>
+</scene>
+""")
+    assert np.allclose(fgf.render(scene, spp=2, progress=False), 1e28, rtol=1e-6)
+    r = fgf_cli("render", str(scene), "-o", str(tmp_path / "b.exr"))
+    assert r.returncode == 2 and "outside the exact accumulator's range" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "b.exr").exists()
