@@ -258,6 +258,9 @@ def ensemble_scene(
     threads: int | None = None,
     defines: Sequence[tuple[str, str]] | None = None,
     progress: _Progress = None,
+    padding: float | None = None,
+    marginal: str | None = None,
+    keep_realizations: bool = False,
     first: int = 0,
 ) -> tuple[_F32Array, _F32Array, dict[str, Any], bool]:
     """Ensemble of explicit realizations: ``(mean, stderr, info, interrupted)``, images ``(H, W, 3)`` float32."""

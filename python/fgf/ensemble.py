@@ -1,13 +1,24 @@
 """Ground truth from explicit realizations of ``fgf`` media.
 
 Each ``fgf`` medium of the scene is replaced, realization by realization,
-by an explicit 3D grid ``sigma_t(x) = max(0, sigma_m rho(x) + sigma_u(x))``
-where ``sigma_u`` is a fractional Gaussian field synthesised with the 1D ray
-statistics of the model (``S_w3 = S_w 2pi(2H+1)``, ``docs/theory.md`` §1); every
-realization is rendered classically (delta/ratio tracking) and the images
-are averaged. The per-pixel standard error of that average comes with it.
-The full description (grid placement, clamping, the grid-variance caveat)
-is in the Rust module ``fgf_render::ensemble``.
+by an explicit 3D grid of extinction whose macro density multiplies the
+whole field, ``sigma_t(x) = rho(x) * field(x)`` (as the model scales the
+fluctuations with ``rho``, ``docs/theory.md`` §4.5):
+
+* ``marginal="gamma"`` (the default for pink noise): ``field = sigma_m X``,
+  ``X`` a Gaussian copula with gamma marginals of mean 1, whose Gaussian
+  spectrum and voxel shape are calibrated so that the grid's exact
+  line-average variance follows the model's ``var[sigma_t](t)`` from one voxel
+  to the grid's side (``docs/theory.md`` §1.8; the residual is in the info);
+* ``marginal="gaussian"`` (the default for k-fBm):
+  ``field = max(0, sigma_m + sigma_u)``, ``sigma_u`` the fractional Gaussian
+  field with the model's 1D ray statistics (``S_w3 = S_w 2pi(2H+1)``, §1.7).
+
+Fields are synthesised on a periodic domain ``padding`` times the grid per
+axis (default 4) so that large scales are not wrapped. Every realization is
+rendered classically (delta/ratio tracking) and the images are averaged;
+the per-pixel standard error of that average comes with it. The full
+description is in the Rust module ``fgf_render::ensemble``.
 
 >>> import fgf                                                            # doctest: +SKIP
 >>> mean, se = fgf.ensemble("scenes/fgf-cube-pink.xml", realizations=16,
@@ -32,6 +43,8 @@ if TYPE_CHECKING:
 
 #: A mean or standard-error image: ``(H, W, 3)`` float32.
 Image = npt.NDArray[np.float32]
+#: The one-point law of the realized extinction.
+Marginal = Literal["auto", "gamma", "gaussian"]
 
 __all__ = ["ensemble"]
 
@@ -47,7 +60,9 @@ def ensemble(
     defines: Defines = None,
     progress: Progress = True,
     return_info: Literal[False] = False,
-    *,
+    padding: float | None = None,
+    marginal: Marginal = "auto",
+    return_realizations: bool = False,
     client: Any = None,
     checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image]: ...
@@ -63,6 +78,9 @@ def ensemble(
     progress: Progress = True,
     *,
     return_info: Literal[True],
+    padding: float | None = None,
+    marginal: Marginal = "auto",
+    return_realizations: bool = False,
     client: Any = None,
     checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image, dict[str, Any]]: ...
@@ -77,7 +95,9 @@ def ensemble(
     defines: Defines = None,
     progress: Progress = True,
     return_info: bool = False,
-    *,
+    padding: float | None = None,
+    marginal: Marginal = "auto",
+    return_realizations: bool = False,
     client: Any = None,
     checkpoint: str | os.PathLike[str] | None = None,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]: ...
@@ -91,7 +111,9 @@ def ensemble(
     defines: Defines = None,
     progress: Progress = True,
     return_info: bool = False,
-    *,
+    padding: float | None = None,
+    marginal: Marginal = "auto",
+    return_realizations: bool = False,
     client: Any = None,
     checkpoint: str | os.PathLike[str] | None = None,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]:
@@ -126,16 +148,27 @@ def ensemble(
     return_info : bool
         Also return a dict: ``realizations_done``, ``spp`` and ``media``, one
         dict per realised medium with ``shape`` ``[nx, ny, nz]``,
-        ``spacing``, ``bbox``, ``sw_3d``, ``clamped_fraction`` and the
-        line-average variance over ``variance_length`` measured on the grids
-        (``realized_variance``) and of the model (``continuum_variance``).
-    client : dask.distributed.Client, optional
-        Render one realization per Dask task on the client's workers, merged
-        in index order: the same bits as without (``fgf.cluster``,
-        ``docs/cluster.md``).
-    checkpoint : path, optional
-        Save the finished realizations there as they arrive; a rerun with the
-        same arguments resumes from them.
+        ``padded_shape`` ``[nz, ny, nx]``, ``spacing``, ``bbox``,
+        ``marginal``, ``sw_3d`` and ``hurst_field`` (of the synthesized
+        Gaussian field), ``alpha_voxel`` (gamma shape of a voxel, NaN for
+        Gaussian), ``clamped_fraction``, ``mean_sigma_t`` (over voxels and
+        realizations) against ``model_mean_sigma_t`` (``mean(sigma_m rho)``),
+        the exact line-average variance along x of the grid
+        (``grid_variances``) and of the model (``model_variances``) at
+        segment ``lengths`` from one voxel to the grid's side, and a Monte
+        Carlo check over ``variance_length``: ``realized_variance`` measured
+        on the realizations against ``continuum_variance``.
+    padding : float, optional
+        Size of the periodic synthesis domain per axis, in grid sides
+        (``1 <= padding <= 16``, default 4; memory grows as ``padding**3``).
+    marginal : {"auto", "gamma", "gaussian"}
+        The one-point law of the extinction (see the module docs); ``"auto"``
+        is gamma for pink noise and Gaussian for k-fBm.
+    return_realizations : bool
+        Also put every realization's image, ``(N, H, W, 3)`` float32 in
+        realization order, in ``info["realizations"]`` (implies nothing
+        about ``return_info``; use both). Region means need them for their
+        standard error: one realization moves many pixels together.
 
     Returns
     -------
@@ -148,7 +181,10 @@ def ensemble(
     fgf.SceneError
         The scene is invalid or has no ``fgf`` medium to realise.
     fgf.ParameterError
-        A bad argument (``realizations = 0``, ``resolution < 2``, ...).
+        A bad argument (``realizations = 0``, ``resolution < 2``,
+        ``padding`` outside ``[1, 16]``, an unknown ``marginal``, ...).
+    fgf.cluster.ClusterError
+        ``client`` lost its scheduler (the checkpoint keeps what finished).
     KeyboardInterrupt
         On Ctrl-C, after the samples in flight finish.
     """
@@ -156,6 +192,7 @@ def ensemble(
     from .render import _defines_list
 
     if client is not None or checkpoint is not None:
+        # One Dask task per realization, merged in index order (fgf.cluster).
         from . import cluster
 
         run = cluster.ensemble(
@@ -169,6 +206,9 @@ def ensemble(
             progress=progress,
             client=client,
             checkpoint=checkpoint,
+            padding=None if padding is None else float(padding),
+            marginal=str(marginal),
+            keep_realizations=bool(return_realizations),
         )
         if run.lost is not None:
             raise cluster.ClusterError(run.lost)
@@ -185,6 +225,9 @@ def ensemble(
             threads=threads,
             defines=_defines_list(defines),
             progress=sink,
+            padding=None if padding is None else float(padding),
+            marginal=str(marginal),
+            keep_realizations=bool(return_realizations),
         )
     if interrupted:
         raise KeyboardInterrupt(f"ensemble interrupted after {info['realizations_done']} realizations")

@@ -48,10 +48,12 @@
 //! assert_eq!(sigma_t.len(), 16 * 16 * 16);
 //! ```
 
+pub mod copula;
 mod error;
 pub mod estimators;
 pub mod exact;
 pub mod export;
+pub mod line_variance;
 
 mod noise;
 pub mod synth;

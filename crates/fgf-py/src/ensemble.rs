@@ -4,7 +4,13 @@
 use crate::errors::ParameterError;
 use crate::progress::run_job;
 use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
-use fgf_render::ensemble::{ensemble_from, total_samples, EnsembleError, EnsembleOptions};
+use fgf_core::Progress;
+use fgf_render::ensemble::{
+    prepare, render_realization, total_samples, Accumulator, EnsembleError, EnsembleOptions,
+    EnsembleOutput, Marginal, RealizationError,
+};
+use fgf_scene::SceneDesc;
+use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
 use std::path::PathBuf;
@@ -22,9 +28,10 @@ type EnsembleResult<'py> = (
 /// where `info` is a dict (`realizations_done`, `spp`, and `media`: one dict
 /// per medium with its grid and variance report); the typed wrapper is
 /// `fgf.ensemble`. `first` selects the realizations
-/// `first..first + realizations` (a distributed ensemble renders each apart).
+/// `first..first + realizations` (a distributed ensemble renders each one
+/// as its own task and merges them in index order).
 #[pyfunction]
-#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, first=0))]
+#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, padding=None, marginal=None, keep_realizations=false, first=0))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble_scene<'py>(
     py: Python<'py>,
@@ -36,8 +43,25 @@ fn ensemble_scene<'py>(
     threads: Option<usize>,
     defines: Option<Vec<(String, String)>>,
     progress: Option<Bound<'py, PyAny>>,
+    padding: Option<f64>,
+    marginal: Option<String>,
+    keep_realizations: bool,
     first: u32,
 ) -> PyResult<EnsembleResult<'py>> {
+    let marginal = match marginal.as_deref() {
+        None => Marginal::Auto,
+        Some(m) => Marginal::parse(m).ok_or_else(|| {
+            ParameterError::new_err(format!(
+                "marginal = {m:?}; must be 'auto', 'gamma' or 'gaussian'"
+            ))
+        })?,
+    };
+    let padding = padding.unwrap_or(fgf_render::ensemble::DEFAULT_PADDING);
+    if !(padding.is_finite() && (1.0..=16.0).contains(&padding)) {
+        return Err(ParameterError::new_err(format!(
+            "padding = {padding}; the periodic synthesis domain must be 1 to 16 grid sides per axis"
+        )));
+    }
     if realizations == 0 {
         return Err(ParameterError::new_err(
             "realizations = 0; need at least 1 (2 for a standard error)",
@@ -56,6 +80,9 @@ fn ensemble_scene<'py>(
         resolution: resolution.unwrap_or(fgf_render::ensemble::DEFAULT_RESOLUTION),
         spp,
         seed,
+        padding,
+        marginal,
+        keep_realizations,
     };
     let total = total_samples(&desc, &opts);
     let source = scene.display().to_string();
@@ -82,7 +109,16 @@ fn ensemble_scene<'py>(
         d.set_item("shape", m.shape.to_vec())?;
         d.set_item("spacing", m.spacing)?;
         d.set_item("bbox", m.bbox.to_vec())?;
+        d.set_item("padded_shape", m.padded_shape.clone())?;
+        d.set_item("marginal", m.marginal)?;
         d.set_item("sw_3d", m.sw_3d)?;
+        d.set_item("hurst_field", m.hurst_field)?;
+        d.set_item("alpha_voxel", m.alpha_voxel)?;
+        d.set_item("mean_sigma_t", m.mean_sigma_t)?;
+        d.set_item("model_mean_sigma_t", m.model_mean_sigma_t)?;
+        d.set_item("lengths", m.lengths.clone())?;
+        d.set_item("model_variances", m.model_variances.clone())?;
+        d.set_item("grid_variances", m.grid_variances.clone())?;
         d.set_item("clamped_fraction", m.clamped_fraction)?;
         d.set_item("variance_length", m.variance_length)?;
         d.set_item("realized_variance", m.realized_variance)?;
@@ -90,7 +126,49 @@ fn ensemble_scene<'py>(
         media.append(d)?;
     }
     info.set_item("media", media)?;
+    if keep_realizations {
+        let n = out.realization_images.len();
+        let flat: Vec<f32> = out.realization_images.concat();
+        let arr = numpy::PyArray1::from_vec(py, flat).reshape([n, h, w, 3])?;
+        info.set_item("realizations", arr)?;
+    }
     Ok((mean, stderr, info, job.interrupted || cancelled))
+}
+
+/// `fgf_render::ensemble::ensemble` over the realizations
+/// `first..first + opts.realizations` (the same per-realization renders and
+/// the same in-order merge).
+fn ensemble_from(
+    scene: &SceneDesc,
+    opts: &EnsembleOptions,
+    first: u32,
+    progress: &dyn Progress,
+) -> Result<EnsembleOutput, EnsembleError> {
+    let prep = prepare(scene, opts)?;
+    let mut acc = Accumulator::new(&prep);
+    let mut interrupted = false;
+    for r in first..first.saturating_add(opts.realizations) {
+        if progress.cancelled() {
+            interrupted = true;
+            break;
+        }
+        match render_realization(&prep, r, progress) {
+            Ok(real) => acc.add(&real),
+            Err(RealizationError::Cancelled) => {
+                interrupted = true;
+                break;
+            }
+            Err(RealizationError::Render(e)) => return Err(e.into()),
+        }
+    }
+    let out = acc.finish(&prep);
+    if interrupted {
+        Err(EnsembleError::Cancelled {
+            partial: Box::new(out),
+        })
+    } else {
+        Ok(out)
+    }
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

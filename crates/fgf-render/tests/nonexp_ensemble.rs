@@ -35,6 +35,7 @@ fn grid_covers_the_medium_box_with_cubic_voxels() {
         resolution: 16,
         spp: Some(1),
         seed: 0,
+        ..Default::default()
     };
     let out = ensemble(&sc, &opts, &fgf_core::NoProgress).unwrap();
     let m = &out.media[0];
@@ -61,6 +62,7 @@ fn vanishing_sw_ensemble_equals_homogeneous() {
         resolution: 16,
         spp: Some(8),
         seed: 1,
+        ..Default::default()
     };
     let out = ensemble(&sc, &opts, &fgf_core::NoProgress).unwrap();
     assert_eq!(out.media[0].clamped_fraction, 0.0);
@@ -101,6 +103,7 @@ fn what_cannot_be_realised_is_a_clear_error() {
         resolution: 8,
         spp: Some(1),
         seed: 0,
+        ..Default::default()
     };
     let davis = scene(
         r#"<medium type="nonexponential" name="interior"><string name="transmittance" value="davis"/><float name="alpha" value="2"/></medium>"#,

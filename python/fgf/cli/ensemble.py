@@ -1,20 +1,22 @@
 """`fgf ensemble`: ground truth for an fgf scene from explicit 3D realizations rendered classically.
 
     fgf ensemble scene.xml --realizations N -o mean.exr [--stderr se.exr]
-                 [--resolution R] [--spp S] [--seed S] [--threads T]
+                 [--resolution R] [--padding P] [--marginal auto|gamma|gaussian]
+                 [--spp S] [--seed S] [--threads T]
                  [-D name=value]... [--png mean.png] [--quiet]
-                 [--cluster local[:N]|tcp://host:port] [--checkpoint FILE]
 
-Each ``fgf`` medium is replaced by explicit grids
-``sigma_t = max(0, sigma_m rho + sigma_u)`` (``sigma_u`` a fractional Gaussian
-field with the model's 1D ray statistics), each realization is rendered with
-delta/ratio tracking, and the mean image and its per-pixel standard error
-are written. The grid resolution, the fraction of clamped voxels and the
-realised against continuum line-average variance are printed. Ctrl-C writes
-the average of the realizations finished so far (exit code 130).
-``--cluster`` renders one realization per Dask task and merges them in
-index order (the same bits as without it); ``--checkpoint`` saves finished
-realizations as they arrive and a rerun resumes (docs/cluster.md).
+Each ``fgf`` medium is replaced by explicit grids ``sigma_t = rho * field``:
+for pink noise (``--marginal gamma``, the default there) a Gaussian copula
+with gamma marginals calibrated so that the grid's line-average variance
+follows the model's; for k-fBm (``gaussian``) ``max(0, sigma_m + sigma_u)``
+with ``sigma_u`` a fractional Gaussian field with the model's 1D ray
+statistics. Fields are synthesised on a periodic domain ``--padding`` times
+the grid (default 4). Each realization is rendered with delta/ratio
+tracking, and the mean image and its per-pixel standard error are written.
+The grid, the calibration, the fraction of clamped voxels and the grid's
+exact line-average variance against the model's (worst ratio over the
+rendered lengths) are printed. Ctrl-C writes the average of the
+realizations finished so far (exit code 130).
 """
 
 from __future__ import annotations
@@ -40,6 +42,14 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument(
         "--resolution", type=int, default=None, help="voxels along the longest side of each medium's box (default 64)"
     )
+    p.add_argument(
+        "--padding", type=float, default=None,
+        help="periodic synthesis domain per axis, in grid sides, 1 to 16 (default 4)",
+    )
+    p.add_argument(
+        "--marginal", choices=("auto", "gamma", "gaussian"), default="auto",
+        help="one-point law of the extinction: calibrated gamma copula or clamped Gaussian (default: gamma for pink noise, gaussian for k-fBm)",
+    )
     p.add_argument("--spp", type=int, default=None, help="samples per pixel per realization (default: the scene's)")
     p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     add_scene_options(p)
@@ -55,6 +65,8 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--realizations {args.realizations}: need at least 1 (2 for a standard error)")
     if args.resolution is not None and args.resolution < 2:
         raise ParameterError(f"--resolution {args.resolution}: need at least 2 voxels along the longest side")
+    if args.padding is not None and not 1.0 <= args.padding <= 16.0:
+        raise ParameterError(f"--padding {args.padding}: the periodic synthesis domain must be 1 to 16 grid sides per axis")
     out, png = check_scene_options(args, {"--stderr": args.stderr})
     check_cluster_options(args)
     t0 = time.perf_counter()
@@ -74,6 +86,8 @@ def run(args: argparse.Namespace) -> int:
                 progress=False if args.quiet else "bar",
                 client=client,
                 checkpoint=args.checkpoint,
+                padding=args.padding,
+                marginal=args.marginal,
             )
         mean, se, info, interrupted, lost = run_.mean, run_.stderr, run_.info, run_.interrupted, run_.lost
     else:
@@ -86,6 +100,8 @@ def run(args: argparse.Namespace) -> int:
             threads=args.threads,
             defines=_defines_list(args.defines),
             progress=None if args.quiet else "bar",
+            padding=args.padding,
+            marginal=args.marginal,
         )
     elapsed = time.perf_counter() - t0
     done = info["realizations_done"]
@@ -104,10 +120,19 @@ def run(args: argparse.Namespace) -> int:
         for m in info["media"]:
             nx, ny, nz = m["shape"]
             ratio = m["realized_variance"] / m["continuum_variance"]
+            exact = [g / t for g, t in zip(m["grid_variances"], m["model_variances"])]
+            law = (
+                f"gamma copula (H_field = {m['hurst_field']:.3f}, voxel alpha = {m['alpha_voxel']:.4g})"
+                if m["marginal"] == "gamma"
+                else f"gaussian, S_w3 = {m['sw_3d']:.4g}"
+            )
             print(
-                f"fgf ensemble: medium {m['medium']}: grid {nx}x{ny}x{nz}, voxel {m['spacing']:.4g}, "
-                f"S_w3 = {m['sw_3d']:.4g}; clamped voxels {100 * m['clamped_fraction']:.3f}%; "
-                f"line-average variance over {m['variance_length']:.4g}: realised {m['realized_variance']:.4g} "
+                f"fgf ensemble: medium {m['medium']}: grid {nx}x{ny}x{nz} (synthesis domain "
+                f"{'x'.join(str(v) for v in m['padded_shape'][::-1])}), voxel {m['spacing']:.4g}, {law}; "
+                f"clamped voxels {100 * m['clamped_fraction']:.3f}%; mean sigma_t {m['mean_sigma_t']:.4g} "
+                f"(model {m['model_mean_sigma_t']:.4g}); exact grid/model line-average variance "
+                f"{min(exact):.3f} to {max(exact):.3f} over lengths {m['lengths'][0]:.3g} to {m['lengths'][-1]:.3g}; "
+                f"over {m['variance_length']:.4g}: realised {m['realized_variance']:.4g} "
                 f"vs continuum {m['continuum_variance']:.4g} ({100 * ratio:.1f}%)",
                 file=sys.stderr,
             )

@@ -436,15 +436,17 @@ def merge_realizations(reals: Sequence[Realization], requested: int) -> tuple[F3
         stderr = np.sqrt(np.maximum((s2 - nf * m * m) / (nf - 1.0), 0.0) / nf).astype(np.float32)
     media = []
     for k, first in enumerate(reals[0].info["media"]):
+        # The plan's fields are the same in every realization; the measured
+        # ones are means over realizations of equal grid size: the mean of the
+        # per-realization values (the Rust merge divides sums instead, so the
+        # last bits of these report numbers may differ; the images do not).
         item = dict(first)
-        var_sum = 0.0
-        clamped = 0.0
-        for r in reals:
-            var_sum += r.info["media"][k]["realized_variance"]
-            clamped += r.info["media"][k]["clamped_fraction"]
-        item["realized_variance"] = var_sum / nf
-        # Every realization has the same number of grid values.
-        item["clamped_fraction"] = clamped / nf
+        for name in ("realized_variance", "clamped_fraction", "mean_sigma_t"):
+            if name in first:
+                total = 0.0
+                for r in reals:
+                    total += r.info["media"][k][name]
+                item[name] = total / nf
         media.append(item)
     info = {
         "realizations_done": n,
@@ -466,6 +468,9 @@ def ensemble(
     progress: Union[Progress, str] = True,
     client: Optional["Client"] = None,
     checkpoint: Optional[Union[str, os.PathLike[str]]] = None,
+    padding: Optional[float] = None,
+    marginal: Optional[str] = None,
+    keep_realizations: bool = False,
 ) -> EnsembleRun:
     """The ensemble of ``fgf ensemble`` with one task per realization index,
     merged in index order: the same bits as the single-process ensemble.
@@ -477,7 +482,15 @@ def ensemble(
     defines = list(defines)
     path = os.fspath(scene)
     payload = ScenePayload.from_file(path, defines)
-    meta = {"kind": "ensemble", "scene_digest": payload.digest, "seed": seed, "resolution": resolution, "spp": spp}
+    meta = {
+        "kind": "ensemble",
+        "scene_digest": payload.digest,
+        "seed": seed,
+        "resolution": resolution,
+        "spp": spp,
+        "padding": padding,
+        "marginal": marginal,
+    }
     done: dict[int, Realization] = {}
     ckpt = None if checkpoint is None else os.fspath(checkpoint)
     if ckpt is not None and os.path.exists(ckpt):
@@ -486,7 +499,8 @@ def ensemble(
         for key, info in found.get("infos", {}).items():
             done[int(key)] = Realization(int(key), arrays[f"r{key}"], info)
     resumed = len(done)
-    todo = [(r, resolution, spp, seed) for r in range(realizations) if r not in done]
+    options: dict[str, Any] = {"resolution": resolution, "spp": spp, "seed": seed, "padding": padding, "marginal": marginal}
+    todo = [(r, options) for r in range(realizations) if r not in done]
     shape = None
     if todo:
         prep = _core.prepare_scene(path, defines)
@@ -502,14 +516,7 @@ def ensemble(
 
     def local(index: int, *_: Any) -> Optional[Realization]:
         mean, _se, info, interrupted = _core.ensemble_scene(
-            path,
-            1,
-            resolution=resolution,
-            spp=spp,
-            seed=seed,
-            threads=threads,
-            defines=defines,
-            first=index,
+            path, 1, threads=threads, defines=defines, first=index, **options
         )
         if interrupted or info["realizations_done"] < 1:
             return None
@@ -536,6 +543,8 @@ def ensemble(
         nan = np.full((1, 1, 3), np.nan, dtype=np.float32)
         return EnsembleRun(nan, nan, {"realizations_done": 0, "media": []}, True, lost, resumed, [])
     mean, stderr, info = merge_realizations(kept, realizations)
+    if keep_realizations:
+        info["realizations"] = np.stack([x.image for x in sorted(kept, key=lambda x: x.index)])
     return EnsembleRun(
         mean, stderr, info, interrupted or len(kept) < realizations, lost, resumed, sorted(x.index for x in kept)
     )

@@ -93,20 +93,19 @@ class Realization:
 
 
 def ensemble_task(
-    payload: ScenePayload, index: int, resolution: Optional[int], spp: Optional[int], seed: int
+    payload: ScenePayload, index: int, options: dict[str, Any]
 ) -> Union[Realization, TaskError, None]:
-    """Realization ``index`` of the ensemble of the shipped scene (``None`` if interrupted)."""
+    """Realization ``index`` of the ensemble of the shipped scene (``None`` if
+    interrupted); ``options`` are ``ensemble_scene``'s keyword arguments."""
     try:
         with materialized(payload) as scene:
             mean, _, info, interrupted = _core.ensemble_scene(
                 os.fspath(scene),
                 1,
-                resolution=resolution,
-                spp=spp,
-                seed=seed,
                 threads=worker_threads(),
                 defines=list(payload.defines),
                 first=index,
+                **options,
             )
     except (_core.FgfError, OSError) as e:
         return _as_task_error(e)
