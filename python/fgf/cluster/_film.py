@@ -118,6 +118,9 @@ def check_meta(path: str | os.PathLike[str], found: dict[str, Any], expected: di
         "height": "film height",
         "resolution": "--resolution",
         "spp": "--spp",
+        "padding": "--padding",
+        "marginal": "--marginal",
+        "nodes": "--nodes",
     }
     for key, want in expected.items():
         got = found.get(key)
