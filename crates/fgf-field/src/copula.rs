@@ -407,7 +407,7 @@ mod tests {
         // a = 1: P = 1 - e^-x.
         for x in [0.1, 1.0, 3.0, 20.0] {
             let (p, q) = gamma_pq(1.0, x);
-            assert!((q - (-x as f64).exp()).abs() < 1e-14 * q.max(1e-300) + 1e-16);
+            assert!((q - (-x).exp()).abs() < 1e-14 * q.max(1e-300) + 1e-16);
             assert!((p + q - 1.0).abs() < 1e-14);
         }
         // a = 1/2: P = erf(sqrt x).

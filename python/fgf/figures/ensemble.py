@@ -230,7 +230,9 @@ def _ensemble(ctx: Context, res: dict[str, Any]) -> Figure:
     ensemble = need("ensemble")
     s = settings(ctx.quick)
     realizations = 4 if ctx.quick else 16
-    grid = 32 if ctx.quick else 96
+    # 64³ grids (a 256³ synthesis domain): the resolution the pink study of
+    # docs/validation.md calibrates and measures.
+    grid = 32 if ctx.quick else 64
     spp_each = 8 if ctx.quick else 64
     seed = ctx.seed + 800
     rows = []

@@ -425,7 +425,6 @@ pub fn ensemble(
 
 #[cfg(test)]
 mod tests {
-    use super::*;
     use glam::{DVec3, Mat4, Vec3};
 
     #[test]
