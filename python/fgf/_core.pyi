@@ -43,6 +43,11 @@ __all__ = [
     "write_exr",
     "write_png",
     "ensemble_scene",
+    "PreparedScene",
+    "prepare_scene",
+    "render_range",
+    "film_merge",
+    "film_finish",
     "truth_plan",
     "render_truth_node",
     "TruthBar",
@@ -205,6 +210,43 @@ def render_scene(
 ) -> tuple[_F32Array, _F32Array | None, int, bool]:
     """Render a scene file: ``(image (H, W, 3) float32, variance or None, spp_done, interrupted)``."""
 
+_U64Array: TypeAlias = npt.NDArray[np.uint64]
+
+class PreparedScene:
+    """A compiled scene kept by a worker (see ``fgf.cluster``)."""
+
+    @property
+    def width(self) -> int: ...
+    @property
+    def height(self) -> int: ...
+    @property
+    def spp(self) -> int: ...
+    @property
+    def seed(self) -> int: ...
+
+def prepare_scene(scene: str, defines: Sequence[tuple[str, str]] | None = None) -> PreparedScene:
+    """Load and compile a scene file for :func:`render_range`."""
+
+def render_range(
+    prepared: PreparedScene,
+    s0: int,
+    s1: int,
+    seed: int | None = None,
+    variance: bool = False,
+    threads: int | None = None,
+    progress: _Progress = None,
+) -> tuple[_U64Array, _U64Array | None, int, bool]:
+    """Exact sums of samples ``[s0, s1)``: ``(sum, sum_sq or None, samples_done, interrupted)``,
+    sums as ``(H, W, 3, 3)`` uint64 fixed-point limbs."""
+
+def film_merge(dst: _U64Array, src: _U64Array) -> None:
+    """``dst += src`` for exact sums, in place."""
+
+def film_finish(
+    sum: _U64Array, sum_sq: _U64Array | None, samples: int, spp_requested: int
+) -> tuple[_F32Array, _F32Array | None]:
+    """The image (and variance of the mean, if ``sum_sq``) of exact sums."""
+
 # --- ensemble -------------------------------------------------------------------
 
 def ensemble_scene(
@@ -219,6 +261,7 @@ def ensemble_scene(
     padding: float | None = None,
     marginal: str | None = None,
     keep_realizations: bool = False,
+    first: int = 0,
 ) -> tuple[_F32Array, _F32Array, dict[str, Any], bool]:
     """Ensemble of explicit realizations: ``(mean, stderr, info, interrupted)``, images ``(H, W, 3)`` float32."""
 

@@ -63,6 +63,8 @@ def ensemble(
     padding: float | None = None,
     marginal: Marginal = "auto",
     return_realizations: bool = False,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image]: ...
 @overload
 def ensemble(
@@ -79,6 +81,8 @@ def ensemble(
     padding: float | None = None,
     marginal: Marginal = "auto",
     return_realizations: bool = False,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image, dict[str, Any]]: ...
 @overload
 def ensemble(
@@ -94,6 +98,8 @@ def ensemble(
     padding: float | None = None,
     marginal: Marginal = "auto",
     return_realizations: bool = False,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]: ...
 def ensemble(
     scene: str | os.PathLike[str],
@@ -108,6 +114,8 @@ def ensemble(
     padding: float | None = None,
     marginal: Marginal = "auto",
     return_realizations: bool = False,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Union[tuple[Image, Image], tuple[Image, Image, dict[str, Any]]]:
     """Average classical renders of explicit realizations of the scene's ``fgf`` media.
 
@@ -175,12 +183,38 @@ def ensemble(
     fgf.ParameterError
         A bad argument (``realizations = 0``, ``resolution < 2``,
         ``padding`` outside ``[1, 16]``, an unknown ``marginal``, ...).
+    fgf.cluster.ClusterError
+        ``client`` lost its scheduler (the checkpoint keeps what finished).
     KeyboardInterrupt
         On Ctrl-C, after the samples in flight finish.
     """
     from ._progress import check_seed, progress_sink
     from .render import _defines_list
 
+    if client is not None or checkpoint is not None:
+        # One Dask task per realization, merged in index order (fgf.cluster).
+        from . import cluster
+
+        run = cluster.ensemble(
+            scene,
+            int(realizations),
+            resolution=resolution,
+            spp=spp,
+            seed=check_seed(seed),
+            threads=threads,
+            defines=_defines_list(defines),
+            progress=progress,
+            client=client,
+            checkpoint=checkpoint,
+            padding=None if padding is None else float(padding),
+            marginal=str(marginal),
+            keep_realizations=bool(return_realizations),
+        )
+        if run.lost is not None:
+            raise cluster.ClusterError(run.lost)
+        if run.interrupted:
+            raise KeyboardInterrupt(f"ensemble interrupted after {run.info['realizations_done']} realizations")
+        return (run.mean, run.stderr, run.info) if return_info else (run.mean, run.stderr)
     with progress_sink(progress, "ensemble") as sink:
         mean, stderr, info, interrupted = _core.ensemble_scene(
             os.fspath(scene),

@@ -60,6 +60,10 @@ def render(
     defines: Defines = None,
     progress: Progress = True,
     return_variance: Literal[False] = False,
+    *,
+    client: Any = None,
+    chunk_spp: int | None = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Image: ...
 @overload
 def render(
@@ -71,6 +75,9 @@ def render(
     progress: Progress = True,
     *,
     return_variance: Literal[True],
+    client: Any = None,
+    chunk_spp: int | None = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image]: ...
 @overload
 def render(
@@ -81,6 +88,10 @@ def render(
     defines: Defines = None,
     progress: Progress = True,
     return_variance: bool = False,
+    *,
+    client: Any = None,
+    chunk_spp: int | None = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Image | tuple[Image, Image]: ...
 def render(
     scene: str | os.PathLike[str],
@@ -90,6 +101,10 @@ def render(
     defines: Defines = None,
     progress: Progress = True,
     return_variance: bool = False,
+    *,
+    client: Any = None,
+    chunk_spp: int | None = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Image | tuple[Image, Image]:
     """Render a Mitsuba 3 XML scene file.
 
@@ -113,6 +128,17 @@ def render(
         callable is called as ``progress(done, total)``.
     return_variance : bool
         Also return the per-pixel variance of the pixel mean.
+    client : dask.distributed.Client, optional
+        Render chunks of ``chunk_spp`` samples per pixel on the client's
+        workers (``fgf.cluster``, ``docs/cluster.md``). The image has the
+        same bits as without a client, for any chunk size and worker count.
+    chunk_spp : int, optional
+        Samples per pixel of a chunk (default 16).
+    checkpoint : path, optional
+        Save the finished chunks there as they arrive (with or without a
+        client); a rerun with the same arguments resumes from them, and
+        ``spp`` may be raised. A checkpoint of other arguments is refused
+        with ``fgf.ParameterError``.
 
     Returns
     -------
@@ -131,7 +157,29 @@ def render(
         On Ctrl-C, after the pass of samples in flight finishes (the CLI
         instead writes the partial image; use it for long interruptible
         renders).
+    fgf.cluster.ClusterError
+        The client lost its scheduler (the checkpoint keeps what finished).
     """
+    if client is not None or chunk_spp is not None or checkpoint is not None:
+        from . import cluster
+
+        run = cluster.render(
+            scene,
+            spp=spp,
+            seed=None if seed is None else check_seed(seed),
+            threads=threads,
+            defines=_defines_list(defines),
+            progress=progress,
+            return_variance=return_variance,
+            client=client,
+            chunk_spp=chunk_spp,
+            checkpoint=checkpoint,
+        )
+        if run.lost is not None:
+            raise cluster.ClusterError(run.lost)
+        if run.interrupted:
+            raise KeyboardInterrupt(f"render interrupted after {run.spp_done} samples per pixel")
+        return (run.image, cast(Image, run.variance)) if return_variance else run.image
     with progress_sink(progress, "render") as sink:
         img, var, done, interrupted = _core.render_scene(
             os.fspath(scene),

@@ -223,6 +223,9 @@ def truth(
     progress: Progress = True,
     threads: int | None = None,
     return_stderr: Literal[False] = False,
+    *,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Image: ...
 @overload
 def truth(
@@ -235,6 +238,8 @@ def truth(
     threads: int | None = None,
     *,
     return_stderr: Literal[True],
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> tuple[Image, Image]: ...
 def truth(
     scene: str | os.PathLike[str],
@@ -245,6 +250,9 @@ def truth(
     progress: Progress = True,
     threads: int | None = None,
     return_stderr: bool = False,
+    *,
+    client: Any = None,
+    checkpoint: str | os.PathLike[str] | None = None,
 ) -> Image | tuple[Image, Image]:
     """The exact ensemble average of ``scene`` over constant-α realizations.
 
@@ -270,6 +278,13 @@ def truth(
     return_stderr : bool
         Also return the per-pixel standard error ``sqrt(sum_i w_i² var_i)``
         of the Monte Carlo noise of the node renders.
+    client : dask.distributed.Client, optional
+        Render one node per Dask task on the client's workers; the nodes are
+        still summed here in node order, so the image has the same bits
+        (``fgf.cluster``, ``docs/cluster.md``).
+    checkpoint : path, optional
+        Save the finished node renders there as they arrive (with or without
+        a client); a rerun with the same arguments resumes from them.
 
     Returns
     -------
@@ -292,6 +307,22 @@ def truth(
     total = per_node * plan.nodes
     acc = np.zeros((plan.height, plan.width, 3), dtype=np.float64)
     var_acc = np.zeros_like(acc) if return_stderr else None
+    if client is not None or checkpoint is not None:
+        from . import cluster
+        from ._progress import check_seed
+        from .render import _defines_list
+
+        run = cluster.truth_nodes(
+            scene, plan.nodes, spp=spp, seed=check_seed(seed), threads=threads, defines=_defines_list(defines),
+            progress=progress, return_variance=return_stderr, client=client, checkpoint=checkpoint,
+        )
+        if run.lost is not None:
+            raise cluster.ClusterError(run.lost)
+        if run.interrupted:
+            raise KeyboardInterrupt(f"truth interrupted after {len(run.nodes)} of {plan.nodes} nodes")
+        for i, w in enumerate(plan.weights):
+            _add_node(acc, var_acc, w, run.nodes[i].image, run.nodes[i].variance)
+        return _finish(acc, var_acc)
     with progress_sink(progress, "truth") as sink:
         bar: Any = None
         if sink is not None:
@@ -308,9 +339,25 @@ def truth(
                 progress=None if bar is None else _Offset(bar),
                 return_variance=return_stderr,
             )
-            acc += w * img.astype(np.float64)
-            if var_acc is not None and var is not None:
-                var_acc += (w * w) * var.astype(np.float64)
+            _add_node(acc, var_acc, w, img, var)
+    return _finish(acc, var_acc)
+
+
+def _add_node(
+    acc: npt.NDArray[np.float64],
+    var_acc: Optional[npt.NDArray[np.float64]],
+    w: float,
+    img: Image,
+    var: Optional[Image],
+) -> None:
+    """Add node ``w``-weighted (one code path for local and cluster runs, so
+    the sums have the same bits)."""
+    acc += w * img.astype(np.float64)
+    if var_acc is not None and var is not None:
+        var_acc += (w * w) * var.astype(np.float64)
+
+
+def _finish(acc: npt.NDArray[np.float64], var_acc: Optional[npt.NDArray[np.float64]]) -> Image | tuple[Image, Image]:
     out = acc.astype(np.float32)
     if var_acc is not None:
         return out, np.sqrt(np.maximum(var_acc, 0.0)).astype(np.float32)

@@ -4,7 +4,12 @@
 use crate::errors::ParameterError;
 use crate::progress::run_job;
 use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
-use fgf_render::ensemble::{ensemble, total_samples, EnsembleError, EnsembleOptions, Marginal};
+use fgf_core::Progress;
+use fgf_render::ensemble::{
+    prepare, render_realization, total_samples, Accumulator, EnsembleError, EnsembleOptions,
+    EnsembleOutput, Marginal, RealizationError,
+};
+use fgf_scene::SceneDesc;
 use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -22,9 +27,11 @@ type EnsembleResult<'py> = (
 /// the scene's `fgf` media. Returns `(mean, stderr, info, interrupted)`
 /// where `info` is a dict (`realizations_done`, `spp`, and `media`: one dict
 /// per medium with its grid and variance report); the typed wrapper is
-/// `fgf.ensemble`.
+/// `fgf.ensemble`. `first` selects the realizations
+/// `first..first + realizations` (a distributed ensemble renders each one
+/// as its own task and merges them in index order).
 #[pyfunction]
-#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, padding=None, marginal=None, keep_realizations=false))]
+#[pyo3(signature = (scene, realizations, resolution=None, spp=None, seed=0, threads=None, defines=None, progress=None, padding=None, marginal=None, keep_realizations=false, first=0))]
 #[allow(clippy::too_many_arguments)]
 fn ensemble_scene<'py>(
     py: Python<'py>,
@@ -39,6 +46,7 @@ fn ensemble_scene<'py>(
     padding: Option<f64>,
     marginal: Option<String>,
     keep_realizations: bool,
+    first: u32,
 ) -> PyResult<EnsembleResult<'py>> {
     let marginal = match marginal.as_deref() {
         None => Marginal::Auto,
@@ -79,7 +87,7 @@ fn ensemble_scene<'py>(
     let total = total_samples(&desc, &opts);
     let source = scene.display().to_string();
     let job = run_job(py, total, "ensemble", progress.as_ref(), |counter| {
-        in_pool(threads, || ensemble(&desc, &opts, counter))
+        in_pool(threads, || ensemble_from(&desc, &opts, first, counter))
     })?;
     // A cancelled ensemble still returns the realizations finished.
     let (out, cancelled) = match job.value {
@@ -125,6 +133,42 @@ fn ensemble_scene<'py>(
         info.set_item("realizations", arr)?;
     }
     Ok((mean, stderr, info, job.interrupted || cancelled))
+}
+
+/// `fgf_render::ensemble::ensemble` over the realizations
+/// `first..first + opts.realizations` (the same per-realization renders and
+/// the same in-order merge).
+fn ensemble_from(
+    scene: &SceneDesc,
+    opts: &EnsembleOptions,
+    first: u32,
+    progress: &dyn Progress,
+) -> Result<EnsembleOutput, EnsembleError> {
+    let prep = prepare(scene, opts)?;
+    let mut acc = Accumulator::new(&prep);
+    let mut interrupted = false;
+    for r in first..first.saturating_add(opts.realizations) {
+        if progress.cancelled() {
+            interrupted = true;
+            break;
+        }
+        match render_realization(&prep, r, progress) {
+            Ok(real) => acc.add(&real),
+            Err(RealizationError::Cancelled) => {
+                interrupted = true;
+                break;
+            }
+            Err(RealizationError::Render(e)) => return Err(e.into()),
+        }
+    }
+    let out = acc.finish(&prep);
+    if interrupted {
+        Err(EnsembleError::Cancelled {
+            partial: Box::new(out),
+        })
+    } else {
+        Ok(out)
+    }
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

@@ -1,14 +1,23 @@
 //! Python bindings for the render area: `render_scene` (behind
-//! `fgf.render`), `write_exr`, `write_png`.
+//! `fgf.render`), `write_exr`, `write_png`, and the sample-range API behind
+//! `fgf.cluster`: `prepare_scene` (a compiled scene kept by a worker),
+//! `render_range` (the exact sums of samples `s0..s1`), `film_merge` and
+//! `film_finish` (`docs/theory.md` §7.17).
 
 use crate::errors::{io_err, ParameterError, SceneError};
 use crate::progress::run_job;
+use fgf_render::film::{FilmState, Fixed, FIXED_LIMBS};
+use fgf_render::render::Prepared;
 use fgf_render::{RenderError, RenderOptions};
 use fgf_scene::SceneErrorKind;
-use numpy::{PyArray1, PyArrayMethods, PyReadonlyArray3, PyUntypedArrayMethods};
+use numpy::{
+    PyArray1, PyArrayMethods, PyReadonlyArray3, PyReadonlyArrayDyn, PyReadwriteArrayDyn,
+    PyUntypedArrayMethods,
+};
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
 use std::path::PathBuf;
+use std::sync::Arc;
 
 pub(crate) fn scene_err(e: fgf_scene::SceneError) -> PyErr {
     match e.kind {
@@ -127,6 +136,215 @@ fn render_scene<'py>(
     Ok((img, var, out.spp_done, job.interrupted || cancelled))
 }
 
+/// A compiled scene (BVH, media, emitters), kept by a worker so that each
+/// chunk of samples does not load and build the scene again.
+#[pyclass(frozen, name = "PreparedScene", module = "fgf._core")]
+pub struct PyPrepared {
+    inner: Arc<Prepared>,
+    source: String,
+}
+
+#[pymethods]
+impl PyPrepared {
+    /// Film width in pixels.
+    #[getter]
+    fn width(&self) -> usize {
+        self.inner.width
+    }
+    /// Film height in pixels.
+    #[getter]
+    fn height(&self) -> usize {
+        self.inner.height
+    }
+    /// The scene's `sample_count`.
+    #[getter]
+    fn spp(&self) -> u32 {
+        self.inner.spp
+    }
+    /// The scene's sampler seed.
+    #[getter]
+    fn seed(&self) -> u64 {
+        self.inner.seed
+    }
+}
+
+/// Load and compile a scene for [`render_range`].
+#[pyfunction]
+#[pyo3(signature = (scene, defines=None))]
+fn prepare_scene(
+    py: Python<'_>,
+    scene: PathBuf,
+    defines: Option<Vec<(String, String)>>,
+) -> PyResult<PyPrepared> {
+    let desc = load_scene(py, &scene, defines)?;
+    let source = scene.display().to_string();
+    let inner = py
+        .detach(|| Prepared::new(&desc))
+        .map_err(|e| render_err(e, &source))?;
+    Ok(PyPrepared {
+        inner: Arc::new(inner),
+        source,
+    })
+}
+
+/// `(H, W, 3, FIXED_LIMBS)` uint64 limbs of exact sums.
+fn limbs_to_py<'py>(
+    py: Python<'py>,
+    v: &[Fixed],
+    h: usize,
+    w: usize,
+) -> PyResult<Bound<'py, PyAny>> {
+    let flat: Vec<u64> = v.iter().flat_map(|f| f.0).collect();
+    Ok(PyArray1::from_vec(py, flat)
+        .reshape([h, w, 3, FIXED_LIMBS])?
+        .into_any())
+}
+
+fn limbs_from_py(a: &[u64]) -> Vec<Fixed> {
+    a.chunks_exact(FIXED_LIMBS)
+        .map(|c| {
+            let mut f = Fixed::default();
+            f.0.copy_from_slice(c);
+            f
+        })
+        .collect()
+}
+
+/// What `render_range` returns: `(sum, sum_sq or None, samples_done,
+/// interrupted)`.
+type RangeResult<'py> = (Bound<'py, PyAny>, Option<Bound<'py, PyAny>>, u64, bool);
+
+/// The exact per-pixel sums of samples `s0..s1` of a prepared scene:
+/// `(sum, sum_sq or None, samples_done, interrupted)`, sums as
+/// `(H, W, 3, limbs)` uint64 fixed-point limbs holding samples
+/// `s0..s0 + samples_done` (fewer than asked only if interrupted).
+#[pyfunction]
+#[pyo3(signature = (prepared, s0, s1, seed=None, variance=false, threads=None, progress=None))]
+#[allow(clippy::too_many_arguments)]
+fn render_range<'py>(
+    py: Python<'py>,
+    prepared: &PyPrepared,
+    s0: u32,
+    s1: u32,
+    seed: Option<u64>,
+    variance: bool,
+    threads: Option<usize>,
+    progress: Option<Bound<'py, PyAny>>,
+) -> PyResult<RangeResult<'py>> {
+    check_spp_threads(None, threads)?;
+    if s0 >= s1 {
+        return Err(ParameterError::new_err(format!(
+            "sample range [{s0}, {s1}) is empty; need s0 < s1"
+        )));
+    }
+    let p = prepared.inner.clone();
+    let seed = seed.unwrap_or(p.seed);
+    let total = (p.width * p.height) as u64 * (s1 - s0) as u64;
+    let job = run_job(py, total, "render", progress.as_ref(), |counter| {
+        in_pool(threads, || {
+            p.render_range(seed, s0..s1, variance, None, counter)
+        })
+    })?;
+    let state = job.value.map_err(|e| render_err(e, &prepared.source))?;
+    let (h, w) = (state.height, state.width);
+    let sum = limbs_to_py(py, &state.sum, h, w)?;
+    let sq = match &state.sum_sq {
+        Some(v) => Some(limbs_to_py(py, v, h, w)?),
+        None => None,
+    };
+    let interrupted = job.interrupted || state.samples < (s1 - s0) as u64;
+    Ok((sum, sq, state.samples, interrupted))
+}
+
+fn check_limbs(name: &str, shape: &[usize]) -> PyResult<(usize, usize)> {
+    if shape.len() != 4 || shape[2] != 3 || shape[3] != FIXED_LIMBS {
+        return Err(ParameterError::new_err(format!(
+            "{name} has shape {shape:?}; expected (H, W, 3, {FIXED_LIMBS}) uint64 limbs"
+        )));
+    }
+    Ok((shape[0], shape[1]))
+}
+
+/// `dst += src` for exact sums (`(H, W, 3, limbs)` uint64), in place; an
+/// `fgf.ParameterError` if a sum leaves the accumulator's range.
+#[pyfunction]
+fn film_merge(
+    mut dst: PyReadwriteArrayDyn<'_, u64>,
+    src: PyReadonlyArrayDyn<'_, u64>,
+) -> PyResult<()> {
+    let dshape = check_limbs("dst", dst.shape())?;
+    let sshape = check_limbs("src", src.shape())?;
+    if dshape != sshape {
+        return Err(ParameterError::new_err(format!(
+            "cannot merge sums of a {}x{} film into a {}x{} one",
+            sshape.1, sshape.0, dshape.1, dshape.0
+        )));
+    }
+    let s = src.as_slice()?;
+    let d = dst.as_slice_mut()?;
+    for (i, (dc, sc)) in d
+        .chunks_exact_mut(FIXED_LIMBS)
+        .zip(s.chunks_exact(FIXED_LIMBS))
+        .enumerate()
+    {
+        let mut a = Fixed::default();
+        a.0.copy_from_slice(dc);
+        let mut b = Fixed::default();
+        b.0.copy_from_slice(sc);
+        if !a.merge(&b) {
+            let (px, c) = (i / 3, i % 3);
+            return Err(ParameterError::new_err(format!(
+                "pixel ({}, {}) channel {c}: merged sum leaves the exact accumulator's range \
+                 |sum| < 2^95",
+                px % dshape.1,
+                px / dshape.1
+            )));
+        }
+        dc.copy_from_slice(&a.0);
+    }
+    Ok(())
+}
+
+/// What `film_finish` returns: `(image, variance or None)`.
+type FinishResult<'py> = (Bound<'py, PyAny>, Option<Bound<'py, PyAny>>);
+
+/// The image (pixel means over `samples`) of exact sums, with the variance
+/// of the means if `sum_sq` is given: the same bits as a single render.
+#[pyfunction]
+#[pyo3(signature = (sum, sum_sq, samples, spp_requested))]
+fn film_finish<'py>(
+    py: Python<'py>,
+    sum: PyReadonlyArrayDyn<'py, u64>,
+    sum_sq: Option<PyReadonlyArrayDyn<'py, u64>>,
+    samples: u64,
+    spp_requested: u32,
+) -> PyResult<FinishResult<'py>> {
+    let (h, w) = check_limbs("sum", sum.shape())?;
+    let sq = match &sum_sq {
+        Some(a) => {
+            if check_limbs("sum_sq", a.shape())? != (h, w) {
+                return Err(ParameterError::new_err("sum_sq and sum differ in shape"));
+            }
+            Some(limbs_from_py(a.as_slice()?))
+        }
+        None => None,
+    };
+    let state = FilmState {
+        width: w,
+        height: h,
+        samples,
+        sum: limbs_from_py(sum.as_slice()?),
+        sum_sq: sq,
+    };
+    let out = py.detach(|| state.finish(spp_requested));
+    let img = to_hw3(py, out.image, h, w)?;
+    let var = match out.variance {
+        Some(v) => Some(to_hw3(py, v, h, w)?),
+        None => None,
+    };
+    Ok((img, var))
+}
+
 fn image_data(img: &PyReadonlyArray3<'_, f32>) -> PyResult<(usize, usize, Vec<f32>)> {
     let shape = img.shape();
     if shape[2] != 3 {
@@ -165,5 +383,10 @@ pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(render_scene, m)?)?;
     m.add_function(wrap_pyfunction!(write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_png, m)?)?;
+    m.add_class::<PyPrepared>()?;
+    m.add_function(wrap_pyfunction!(prepare_scene, m)?)?;
+    m.add_function(wrap_pyfunction!(render_range, m)?)?;
+    m.add_function(wrap_pyfunction!(film_merge, m)?)?;
+    m.add_function(wrap_pyfunction!(film_finish, m)?)?;
     Ok(())
 }

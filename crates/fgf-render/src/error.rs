@@ -52,6 +52,20 @@ pub enum RenderError {
         #[source]
         source: FieldError,
     },
+    /// A sample (or a pixel's sum of samples, or of their squares) outside
+    /// the exact accumulator's range (`docs/theory.md` §7.17).
+    #[error(
+        "pixel ({x}, {y}) channel {channel}: sample value {value:e} takes the pixel's sum (or sum of \
+         squares) outside the exact accumulator's range |sum| < {limit:e}; the image would be wrong, \
+         so the render stops (check the scene's emitter and medium scales)"
+    )]
+    OutOfRange {
+        x: usize,
+        y: usize,
+        channel: usize,
+        value: f64,
+        limit: f64,
+    },
     /// [`fgf_core::Progress::cancelled`] asked the render to stop: `partial`
     /// is the image of the passes finished (`spp_done` samples per pixel,
     /// possibly 0).

@@ -18,8 +18,10 @@
 //!   weight `f/pdf` relative to the normalised filter, so the tabulation does
 //!   not bias the result.
 //!
-//! Each pixel keeps running sums of its samples ([`Accum`]), from which
-//! [`RenderOutput`] takes the pixel means and, if asked, their variances.
+//! Each pixel keeps exact fixed-point sums of its samples ([`Fixed`] in a
+//! [`FilmState`]), from which [`FilmState::finish`] takes the pixel means
+//! and, if asked, their variances: the sums do not depend on how the samples
+//! were split into passes, chunks or machines (`docs/theory.md` §7.17).
 
 use crate::math::Sampler;
 use crate::spectrum::Spectrum;
@@ -136,25 +138,256 @@ impl Filter {
     }
 }
 
-/// Per-pixel running sums (f64 so that millions of samples add exactly enough).
-#[derive(Debug, Clone, Copy, Default)]
-pub struct Accum {
-    sum: [f64; 3],
-    sum_sq: [f64; 3],
+/// Fractional bits of [`Fixed`]: the accumulator's unit is `2⁻⁹⁶`.
+pub const FIXED_FRAC_BITS: i32 = 96;
+/// Limbs (64-bit words, least significant first) of [`Fixed`].
+pub const FIXED_LIMBS: usize = 3;
+
+/// An exact fixed-point number: a 192-bit two's-complement integer in units
+/// of `2⁻⁹⁶` (`docs/theory.md` §7.17).
+///
+/// Adding values to it is exact integer arithmetic, hence associative and
+/// commutative: a pixel's sum does not depend on the order of its samples,
+/// on how they were split into passes or chunks, or on the order in which
+/// chunks are merged. An f64 is added exactly when its lowest set bit is at
+/// or above `2⁻⁹⁶` (every f32 sample ≥ 2⁻⁷³ ≈ 1e-22, every square of an f32
+/// ≥ 2⁻²⁵); smaller bits are rounded to the nearest unit (an absolute error
+/// ≤ 2⁻⁹⁷ ≈ 6e-30 per value). The range is `|sum| < 2⁹⁵ ≈ 4e28`; leaving it
+/// is reported by [`Fixed::add_f64`] and [`Fixed::merge`] returning `false`.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Fixed(pub [u64; FIXED_LIMBS]);
+
+impl Fixed {
+    #[inline]
+    fn negative(&self) -> bool {
+        (self.0[FIXED_LIMBS - 1] >> 63) != 0
+    }
+
+    /// `self += other` (wrapping); returns `false` on signed overflow.
+    #[inline]
+    pub fn merge(&mut self, other: &Fixed) -> bool {
+        let (sa, sb) = (self.negative(), other.negative());
+        let mut carry = false;
+        for i in 0..FIXED_LIMBS {
+            let (t, c1) = self.0[i].overflowing_add(other.0[i]);
+            let (t, c2) = t.overflowing_add(carry as u64);
+            self.0[i] = t;
+            carry = c1 || c2;
+        }
+        // Two's complement overflows iff both operands have the same sign
+        // and the result has the other.
+        !(sa == sb && self.negative() != sa)
+    }
+
+    /// The fixed-point value of a finite `v`, rounded to the nearest unit
+    /// (ties away from zero); `None` if `|v| ≥ 2⁹⁵` or `v` is not finite.
+    #[inline]
+    pub fn from_f64(v: f64) -> Option<Fixed> {
+        if !v.is_finite() {
+            return None;
+        }
+        if v == 0.0 {
+            return Some(Fixed::default());
+        }
+        let bits = v.to_bits();
+        let exp = ((bits >> 52) & 0x7ff) as i32;
+        let frac = bits & ((1u64 << 52) - 1);
+        // v = m · 2^e with a 53-bit integer m.
+        let (m, e) = if exp == 0 {
+            (frac, -1074)
+        } else {
+            (frac | (1u64 << 52), exp - 1075)
+        };
+        // In units: m · 2^(e + 96).
+        let shift = e + FIXED_FRAC_BITS;
+        let mut mag = [0u64; FIXED_LIMBS];
+        if shift < 0 {
+            let r = (-shift) as u32;
+            // m < 2^53: below half a unit it rounds to 0.
+            if r > 53 {
+                return Some(Fixed::default());
+            }
+            // Round half away from zero: add half a unit before shifting.
+            mag[0] = (m + (1u64 << (r - 1))) >> r;
+        } else {
+            // Keep the magnitude below 2^191 so that it is positive as a
+            // 192-bit two's-complement number.
+            if shift + 53 > 64 * FIXED_LIMBS as i32 - 1 {
+                return None;
+            }
+            let (word, bit) = ((shift / 64) as usize, (shift % 64) as u32);
+            mag[word] = m << bit;
+            if bit > 0 && word + 1 < FIXED_LIMBS {
+                mag[word + 1] = m >> (64 - bit);
+            }
+        }
+        let mut out = Fixed(mag);
+        if v < 0.0 {
+            // Two's-complement negation: invert, add one.
+            let mut carry = true;
+            for w in out.0.iter_mut() {
+                let (t, c) = (!*w).overflowing_add(carry as u64);
+                *w = t;
+                carry = c;
+            }
+        }
+        Some(out)
+    }
+
+    /// `self += v` exactly (up to the rounding of bits below `2⁻⁹⁶`);
+    /// returns `false` if `v` is not finite or the sum leaves the range.
+    #[inline]
+    pub fn add_f64(&mut self, v: f64) -> bool {
+        match Fixed::from_f64(v) {
+            Some(f) => self.merge(&f),
+            None => false,
+        }
+    }
+
+    /// The value as an f64 (a fixed function of the bits, so the same sum
+    /// always gives the same f64).
+    pub fn to_f64(&self) -> f64 {
+        let neg = self.negative();
+        let mut mag = self.0;
+        if neg {
+            let mut carry = true;
+            for w in mag.iter_mut() {
+                let (t, c) = (!*w).overflowing_add(carry as u64);
+                *w = t;
+                carry = c;
+            }
+        }
+        // Most significant limb first; each term is exact in f64 up to one
+        // rounding of its 64 bits, and the sum is taken in a fixed order.
+        let mut x = 0.0f64;
+        for (i, &w) in mag.iter().enumerate().rev() {
+            x += (w as f64) * f64::powi(2.0, 64 * i as i32 - FIXED_FRAC_BITS);
+        }
+        if neg {
+            -x
+        } else {
+            x
+        }
+    }
 }
 
-impl Accum {
-    /// Add one sample; its square too if `variance`.
-    #[inline]
-    pub fn add(&mut self, l: Spectrum, variance: bool) {
+/// The exact per-pixel sums of a set of camera samples: what a render of a
+/// sample range returns, what chunks merge into, and what a checkpoint
+/// holds (`docs/theory.md` §7.17). `sum` (and `sum_sq` if the variance is
+/// kept) has `width·height·3` entries, row-major from the top-left, RGB
+/// interleaved.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct FilmState {
+    pub width: usize,
+    pub height: usize,
+    /// Samples per pixel the sums hold.
+    pub samples: u64,
+    pub sum: Vec<Fixed>,
+    pub sum_sq: Option<Vec<Fixed>>,
+}
+
+/// A sample or a merge that leaves the exact accumulator's range.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct OutOfRange {
+    /// Flat index `(y·width + x)·3 + channel`.
+    pub index: usize,
+    /// The offending sample value (NaN for a merge).
+    pub value: f64,
+}
+
+impl FilmState {
+    /// Empty sums for a `width × height` film.
+    pub fn new(width: usize, height: usize, variance: bool) -> FilmState {
+        let n = width * height * 3;
+        FilmState {
+            width,
+            height,
+            samples: 0,
+            sum: vec![Fixed::default(); n],
+            sum_sq: variance.then(|| vec![Fixed::default(); n]),
+        }
+    }
+
+    /// Add `other`'s sums to these (the same film and variance setting, which
+    /// the caller checks; the result is independent of the merge order).
+    pub fn merge(&mut self, other: &FilmState) -> Result<(), OutOfRange> {
+        debug_assert_eq!(self.sum.len(), other.sum.len());
+        let bad = |index| OutOfRange {
+            index,
+            value: f64::NAN,
+        };
+        for (i, (a, b)) in self.sum.iter_mut().zip(&other.sum).enumerate() {
+            if !a.merge(b) {
+                return Err(bad(i));
+            }
+        }
+        if let (Some(a), Some(b)) = (self.sum_sq.as_mut(), other.sum_sq.as_ref()) {
+            for (i, (a, b)) in a.iter_mut().zip(b).enumerate() {
+                if !a.merge(b) {
+                    return Err(bad(i));
+                }
+            }
+        }
+        self.samples += other.samples;
+        Ok(())
+    }
+
+    /// The image of these sums (pixel means over `samples`), with the
+    /// variances of the means if the squares were kept.
+    pub fn finish(&self, spp_requested: u32) -> RenderOutput {
+        let done = self.samples;
+        let nf = done.max(1) as f64;
+        let image: Vec<f32> = self.sum.iter().map(|s| (s.to_f64() / nf) as f32).collect();
+        let variance = self.sum_sq.as_ref().map(|sq| {
+            self.sum
+                .iter()
+                .zip(sq)
+                .map(|(s, s2)| {
+                    if done < 2 {
+                        return f32::NAN;
+                    }
+                    let m = s.to_f64() / nf;
+                    // Unbiased sample variance, divided by n for the mean.
+                    let var = ((s2.to_f64() - nf * m * m) / (nf - 1.0)).max(0.0);
+                    (var / nf) as f32
+                })
+                .collect()
+        });
+        RenderOutput {
+            width: self.width,
+            height: self.height,
+            image,
+            variance,
+            spp_done: done.min(u32::MAX as u64) as u32,
+            spp_requested,
+        }
+    }
+}
+
+/// Add one sample's radiance `l` to a pixel's three sums (and squares);
+/// `Err(channel, value)` if a channel leaves the accumulator's range.
+#[inline]
+pub fn accumulate(
+    sum: &mut [Fixed],
+    sum_sq: Option<&mut [Fixed]>,
+    l: Spectrum,
+) -> Result<(), (usize, f64)> {
+    for c in 0..3 {
+        let v = l[c] as f64;
+        if !sum[c].add_f64(v) {
+            return Err((c, v));
+        }
+    }
+    if let Some(sq) = sum_sq {
         for c in 0..3 {
             let v = l[c] as f64;
-            self.sum[c] += v;
-            if variance {
-                self.sum_sq[c] += v * v;
+            // Exact: an f32 squared fits in an f64.
+            if !sq[c].add_f64(v * v) {
+                return Err((c, v));
             }
         }
     }
+    Ok(())
 }
 
 /// A rendered image: row-major from the top-left, RGB interleaved.
@@ -169,48 +402,6 @@ pub struct RenderOutput {
     /// Samples per pixel in the image (less than asked if cancelled).
     pub spp_done: u32,
     pub spp_requested: u32,
-}
-
-impl RenderOutput {
-    /// The image of `acc` (`width·height` pixels of `done` samples each),
-    /// with the variances of the pixel means if `variance`.
-    pub fn from_sums(
-        acc: &[Accum],
-        width: usize,
-        height: usize,
-        done: u32,
-        spp_requested: u32,
-        variance: bool,
-    ) -> RenderOutput {
-        let nf = done.max(1) as f64;
-        let image: Vec<f32> = acc
-            .iter()
-            .flat_map(|a| a.sum.map(|s| (s / nf) as f32))
-            .collect();
-        let variance = variance.then(|| {
-            acc.iter()
-                .flat_map(|a| {
-                    [0, 1, 2].map(|c| {
-                        if done < 2 {
-                            return f32::NAN;
-                        }
-                        let m = a.sum[c] / nf;
-                        // Unbiased sample variance, divided by n for the mean.
-                        let var = ((a.sum_sq[c] - nf * m * m) / (nf - 1.0)).max(0.0);
-                        (var / nf) as f32
-                    })
-                })
-                .collect()
-        });
-        RenderOutput {
-            width,
-            height,
-            image,
-            variance,
-            spp_done: done,
-            spp_requested,
-        }
-    }
 }
 
 fn gaussian(x: f32, stddev: f32, radius: f32) -> f32 {

@@ -7,8 +7,12 @@
 //!   the number of samples per pixel it holds (`spp_done`, equal for all
 //!   pixels).
 //! * Sample `k` of pixel `i` uses a random stream derived from
-//!   `(seed, i, k)` only and each pixel accumulates its samples in order, so
-//!   the image is bit-identical for any number of threads.
+//!   `(seed, i, k)` only, and pixels sum their samples exactly in fixed
+//!   point ([`crate::film::Fixed`], `docs/theory.md` §7.17), so the image is
+//!   bit-identical for any number of threads, any pass size, and any split of
+//!   the samples into ranges rendered apart ([`Prepared::render_range`]) and
+//!   merged ([`FilmState::merge`]) in any order — the basis of distributed
+//!   renders and of checkpoints.
 //! * Progress is reported in samples (pixels × samples per pixel).
 //!
 //! ```no_run
@@ -19,12 +23,13 @@
 //! ```
 
 use crate::error::RenderError;
-use crate::film::{Accum, Filter, RenderOutput};
+use crate::film::{accumulate, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS};
 use crate::math::Sampler;
 use crate::world::World;
 use fgf_core::Progress;
 use fgf_scene::SceneDesc;
 use rayon::prelude::*;
+use std::ops::Range;
 
 /// Overrides of the scene's sampler settings.
 #[derive(Debug, Clone, Default)]
@@ -41,65 +46,183 @@ pub struct RenderOptions {
     pub spp_per_pass: Option<u32>,
 }
 
+/// A compiled scene, ready to render any range of samples.
+pub struct Prepared {
+    world: World,
+    filter: Filter,
+    /// The scene's `sample_count`.
+    pub spp: u32,
+    /// The scene's sampler seed.
+    pub seed: u64,
+    pub width: usize,
+    pub height: usize,
+}
+
+impl Prepared {
+    /// Validate and compile `scene` (its BVH, media and emitters).
+    pub fn new(scene: &SceneDesc) -> Result<Prepared, RenderError> {
+        let world = World::build(scene)?;
+        let (width, height) = (world.camera.width as usize, world.camera.height as usize);
+        Ok(Prepared {
+            world,
+            filter: Filter::new(&scene.sensor.rfilter),
+            spp: scene.sensor.spp,
+            seed: scene.sensor.seed,
+            width,
+            height,
+        })
+    }
+
+    /// The exact sums of samples `samples` (`s0..s1`, indices from 0) of
+    /// every pixel with `seed`, their squares too if `variance`. Merging the
+    /// states of disjoint ranges gives the bits of one render of their union.
+    ///
+    /// On cancellation (checked between passes) the state of the passes
+    /// finished is returned: its `samples` is then less than the range's
+    /// length, and it holds the samples `s0..s0 + samples`.
+    pub fn render_range(
+        &self,
+        seed: u64,
+        samples: Range<u32>,
+        variance: bool,
+        spp_per_pass: Option<u32>,
+        progress: &dyn Progress,
+    ) -> Result<FilmState, RenderError> {
+        if samples.start >= samples.end {
+            return Err(RenderError::InvalidOption(format!(
+                "sample range {}..{} is empty; need s0 < s1",
+                samples.start, samples.end
+            )));
+        }
+        let (w, h) = (self.width, self.height);
+        let count = samples.end - samples.start;
+        let per_pass = spp_per_pass
+            .unwrap_or_else(|| ((1usize << 18) / (w * h)).clamp(1, 64) as u32)
+            .clamp(1, count);
+        let mut state = FilmState::new(w, h, variance);
+        let seed_key = Sampler::seed_key(seed);
+        let mut next = samples.start;
+        while next < samples.end {
+            if progress.cancelled() {
+                return Ok(state);
+            }
+            let n = per_pass.min(samples.end - next);
+            let first = next;
+            let sq_rows: Vec<Option<&mut [Fixed]>> = match state.sum_sq.as_mut() {
+                Some(v) => v.chunks_mut(w * 3).map(Some).collect(),
+                None => (0..h).map(|_| None).collect(),
+            };
+            state
+                .sum
+                .par_chunks_mut(w * 3)
+                .zip(sq_rows.into_par_iter())
+                .enumerate()
+                .try_for_each(|(y, (row, mut sq_row))| {
+                    for x in 0..w {
+                        let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);
+                        let px = &mut row[3 * x..3 * x + 3];
+                        for k in first..first + n {
+                            let mut s = Sampler::for_sample(pixel_key, k as u64);
+                            let (fx, fy, weight) = self
+                                .filter
+                                .sample_position(x as u32, y as u32, w as u32, h as u32, &mut s);
+                            let (ray, t_max) = self.world.camera.generate_ray(fx, fy);
+                            let mut l = self.world.li(ray, t_max, &mut s) * weight;
+                            // A NaN or infinite sample (a numerical failure, e.g. a
+                            // zero pdf) would poison the pixel forever: drop it to 0.
+                            if !l.is_finite() {
+                                l = crate::spectrum::Spectrum::ZERO;
+                            }
+                            let sq = sq_row.as_deref_mut().map(|r| &mut r[3 * x..3 * x + 3]);
+                            accumulate(px, sq, l).map_err(|(channel, value)| {
+                                RenderError::OutOfRange {
+                                    x,
+                                    y,
+                                    channel,
+                                    value,
+                                    limit: f64::powi(2.0, 191 - FIXED_FRAC_BITS),
+                                }
+                            })?;
+                        }
+                    }
+                    progress.inc((w as u64) * n as u64);
+                    Ok::<(), RenderError>(())
+                })?;
+            next += n;
+            state.samples += n as u64;
+        }
+        Ok(state)
+    }
+}
+
 /// Render `scene`; see the module docs.
 pub fn render(
     scene: &SceneDesc,
     opts: &RenderOptions,
     progress: &dyn Progress,
 ) -> Result<RenderOutput, RenderError> {
-    let world = World::build(scene)?;
-    let spp = opts.spp.unwrap_or(scene.sensor.spp);
+    let prepared = Prepared::new(scene)?;
+    let spp = opts.spp.unwrap_or(prepared.spp);
     if spp == 0 {
         return Err(RenderError::InvalidOption(
             "spp = 0; need at least 1 sample per pixel".into(),
         ));
     }
-    let seed = opts.seed.unwrap_or(scene.sensor.seed);
-    let filter = Filter::new(&scene.sensor.rfilter);
-    let (w, h) = (world.camera.width as usize, world.camera.height as usize);
-    let per_pass = opts
-        .spp_per_pass
-        .unwrap_or_else(|| ((1usize << 18) / (w * h)).clamp(1, 64) as u32)
-        .clamp(1, spp);
-    let mut acc = vec![Accum::default(); w * h];
-    let mut done = 0u32;
-    let seed_key = Sampler::seed_key(seed);
-    while done < spp {
-        if progress.cancelled() {
-            let partial = RenderOutput::from_sums(&acc, w, h, done, spp, opts.variance);
-            return Err(RenderError::Cancelled {
-                partial: Box::new(partial),
-            });
-        }
-        let n = per_pass.min(spp - done);
-        let first = done;
-        acc.par_chunks_mut(w).enumerate().for_each(|(y, row)| {
-            for (x, a) in row.iter_mut().enumerate() {
-                let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);
-                for k in first..first + n {
-                    let mut s = Sampler::for_sample(pixel_key, k as u64);
-                    let (fx, fy, weight) =
-                        filter.sample_position(x as u32, y as u32, w as u32, h as u32, &mut s);
-                    let (ray, t_max) = world.camera.generate_ray(fx, fy);
-                    let mut l = world.li(ray, t_max, &mut s) * weight;
-                    // A NaN or infinite sample (a numerical failure, e.g. a
-                    // zero pdf) would poison the pixel forever: drop it to 0.
-                    if !l.is_finite() {
-                        l = crate::spectrum::Spectrum::ZERO;
-                    }
-                    a.add(l, opts.variance);
-                }
-            }
-            progress.inc((w as u64) * n as u64);
+    let seed = opts.seed.unwrap_or(prepared.seed);
+    let state = prepared.render_range(seed, 0..spp, opts.variance, opts.spp_per_pass, progress)?;
+    let out = state.finish(spp);
+    if state.samples < spp as u64 {
+        return Err(RenderError::Cancelled {
+            partial: Box::new(out),
         });
-        done += n;
     }
-    Ok(RenderOutput::from_sums(
-        &acc,
-        w,
-        h,
-        done,
-        spp,
-        opts.variance,
-    ))
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use crate::film::Fixed;
+
+    #[test]
+    fn fixed_point_sums_are_exact_and_order_free() {
+        let vals = [0.1f64, 1e-20, 3.5e7, -2.25, 1e-30, 7.0 / 3.0, 1e28];
+        let mut a = Fixed::default();
+        for v in vals {
+            assert!(a.add_f64(v));
+        }
+        let mut b = Fixed::default();
+        for v in vals.iter().rev() {
+            assert!(b.add_f64(*v));
+        }
+        assert_eq!(a, b);
+        let mut c = Fixed::default();
+        let mut d = Fixed::default();
+        for v in &vals[..3] {
+            c.add_f64(*v);
+        }
+        for v in &vals[3..] {
+            d.add_f64(*v);
+        }
+        assert!(d.merge(&c));
+        assert_eq!(a, d);
+        // Round trip of values on the unit grid.
+        for v in [0.5f64, -0.75, 12345.0, 1.0 / 1024.0, -3e20] {
+            assert_eq!(Fixed::from_f64(v).unwrap().to_f64(), v);
+        }
+        // Out of range and non-finite values are refused.
+        assert!(Fixed::from_f64(f64::powi(2.0, 95)).is_none());
+        assert!(Fixed::from_f64(f64::NAN).is_none());
+        let mut big = Fixed::from_f64(f64::powi(2.0, 94)).unwrap();
+        assert!(!big.merge(&Fixed::from_f64(f64::powi(2.0, 94)).unwrap()));
+        // Below half a unit rounds to zero; half a unit rounds away.
+        assert_eq!(
+            Fixed::from_f64(f64::powi(2.0, -98)).unwrap(),
+            Fixed::default()
+        );
+        assert_eq!(Fixed::from_f64(f64::powi(2.0, -97)).unwrap().0, [1, 0, 0]);
+        assert_eq!(
+            Fixed::from_f64(-f64::powi(2.0, -96)).unwrap().0,
+            [u64::MAX; 3]
+        );
+    }
 }

@@ -25,6 +25,7 @@ import argparse
 import sys
 import time
 
+from ._cluster_args import add_cluster_options, check_cluster_options, client_for, summary_lost, wants_chunks
 from ._scene_args import add_scene_options, check_scene_options
 
 
@@ -52,6 +53,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--spp", type=int, default=None, help="samples per pixel per realization (default: the scene's)")
     p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     add_scene_options(p)
+    add_cluster_options(p, chunks=False)
     p.set_defaults(func=run)
 
 
@@ -66,21 +68,46 @@ def run(args: argparse.Namespace) -> int:
     if args.padding is not None and not 1.0 <= args.padding <= 16.0:
         raise ParameterError(f"--padding {args.padding}: the periodic synthesis domain must be 1 to 16 grid sides per axis")
     out, png = check_scene_options(args, {"--stderr": args.stderr})
+    check_cluster_options(args)
     t0 = time.perf_counter()
-    mean, se, info, interrupted = _core.ensemble_scene(
-        args.scene,
-        args.realizations,
-        resolution=args.resolution,
-        spp=args.spp,
-        seed=args.seed,
-        threads=args.threads,
-        defines=_defines_list(args.defines),
-        progress=None if args.quiet else "bar",
-        padding=args.padding,
-        marginal=args.marginal,
-    )
+    lost = None
+    if wants_chunks(args):
+        from .. import cluster
+
+        with client_for(args) as client:
+            run_ = cluster.ensemble(
+                args.scene,
+                args.realizations,
+                resolution=args.resolution,
+                spp=args.spp,
+                seed=args.seed,
+                threads=args.threads,
+                defines=_defines_list(args.defines),
+                progress=False if args.quiet else "bar",
+                client=client,
+                checkpoint=args.checkpoint,
+                padding=args.padding,
+                marginal=args.marginal,
+            )
+        mean, se, info, interrupted, lost = run_.mean, run_.stderr, run_.info, run_.interrupted, run_.lost
+    else:
+        mean, se, info, interrupted = _core.ensemble_scene(
+            args.scene,
+            args.realizations,
+            resolution=args.resolution,
+            spp=args.spp,
+            seed=args.seed,
+            threads=args.threads,
+            defines=_defines_list(args.defines),
+            progress=None if args.quiet else "bar",
+            padding=args.padding,
+            marginal=args.marginal,
+        )
     elapsed = time.perf_counter() - t0
     done = info["realizations_done"]
+    if done == 0 and lost is not None:
+        print(f"fgf ensemble: error: {lost}; no realization had finished, nothing written", file=sys.stderr)
+        return 2
     if done == 0:
         print("fgf ensemble: interrupted before the first realization finished; nothing written", file=sys.stderr)
         return 130
@@ -109,6 +136,9 @@ def run(args: argparse.Namespace) -> int:
                 f"vs continuum {m['continuum_variance']:.4g} ({100 * ratio:.1f}%)",
                 file=sys.stderr,
             )
+    code = summary_lost("ensemble", lost, written, f"the average of the {done} realizations", args.checkpoint)
+    if code is not None:
+        return int(code)
     if interrupted:
         print(
             f"fgf ensemble: interrupted; wrote the average of {done} of {args.realizations} realizations to {written}",

@@ -2,6 +2,7 @@
 
     fgf truth scene.xml -o truth.exr [--stderr se.exr] [--nodes N] [--spp S]
               [--seed S] [--threads T] [-D name=value]... [--png truth.png] [--quiet]
+              [--cluster local[:N]|tcp://host:port] [--checkpoint FILE]
 
 Each realization of a k-fBm ``fgf`` or ``davis`` medium is homogeneous
 along rays, ``sigma = X sigma_m rho`` with ``X ~ Gamma(alpha, mean 1)``
@@ -10,7 +11,10 @@ along rays, ``sigma = X sigma_m rho`` with ``X ~ Gamma(alpha, mean 1)``
 for each of the nodes (default count: the smallest that reproduces
 ``(1 + tau/alpha)^-alpha`` to 1e-4 at the scene's largest optical depth).
 The scene's ``kernel`` is ignored. Ctrl-C stops and writes nothing (a
-partial quadrature sum is no truth); the exit code is then 130.
+partial quadrature sum is no truth); the exit code is then 130. With
+``--cluster`` each node is one Dask task (the nodes are summed here in node
+order: the same bits); with ``--checkpoint`` finished nodes are saved as
+they arrive, so an interrupted truth resumes (docs/cluster.md).
 """
 
 from __future__ import annotations
@@ -19,6 +23,7 @@ import argparse
 import sys
 import time
 
+from ._cluster_args import add_cluster_options, check_cluster_options, client_for
 from ._scene_args import add_scene_options, check_scene_options
 
 
@@ -35,6 +40,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     p.add_argument("--spp", type=int, default=None, help="samples per pixel of each node's render (default: the scene's)")
     p.add_argument("--seed", type=int, default=0, help="master seed (default 0)")
     add_scene_options(p)
+    add_cluster_options(p, chunks=False)
     p.set_defaults(func=run)
 
 
@@ -45,6 +51,7 @@ def run(args: argparse.Namespace) -> int:
     if args.nodes is not None and not 1 <= args.nodes <= 4096:
         raise ParameterError(f"--nodes {args.nodes}: need 1 <= nodes <= 4096")
     out, png = check_scene_options(args, {"--stderr": args.stderr})
+    check_cluster_options(args)
     plan = truth_plan(args.scene, nodes=args.nodes, defines=args.defines)
     spp = plan.spp if args.spp is None else args.spp
     if not args.quiet:
@@ -57,18 +64,22 @@ def run(args: argparse.Namespace) -> int:
     bar = None if args.quiet else _core.TruthBar(plan.nodes * plan.width * plan.height * spp, "truth")
     t0 = time.perf_counter()
     try:
-        img, se = truth(
-            args.scene,
-            spp=args.spp,
-            nodes=plan.nodes,
-            seed=args.seed,
-            defines=args.defines,
-            progress=bar,
-            threads=args.threads,
-            return_stderr=True,
-        )
+        with client_for(args) as client:
+            img, se = truth(
+                args.scene,
+                spp=args.spp,
+                nodes=plan.nodes,
+                seed=args.seed,
+                defines=args.defines,
+                progress=bar,
+                threads=args.threads,
+                return_stderr=True,
+                client=client,
+                checkpoint=args.checkpoint,
+            )
     except KeyboardInterrupt:
-        print("fgf truth: interrupted; nothing written (a partial quadrature sum is no truth)", file=sys.stderr)
+        kept = f"; the finished nodes are in {args.checkpoint}" if args.checkpoint else ""
+        print(f"fgf truth: interrupted; nothing written (a partial quadrature sum is no truth){kept}", file=sys.stderr)
         return 130
     finally:
         if bar is not None:

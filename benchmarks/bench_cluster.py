@@ -1,0 +1,114 @@
+"""Benchmark: a render of about 60 s on one machine, threads (the ordinary
+path) against ``--cluster local:N`` (Dask worker processes), to measure the
+cluster path's overhead and the throughput per worker.
+
+Each configuration is a whole ``fgf render`` process (so the LocalCluster's
+start-up, the scene shipping and the final merge are counted), timed from
+outside; configurations are alternated within each round and the median of
+``--rounds`` (>= 3) rounds is reported, so a load change on a shared machine
+affects every configuration alike. Every cluster image is checked to be
+byte-identical to the threaded one. Configurations:
+
+* ``threads:T`` — ``fgf render --threads T`` (T = 1 and the worker count);
+* ``local:N`` — ``fgf render --cluster local:N --chunk-spp K``, N single-
+  threaded workers (N = 1 and 2 by default).
+
+Overhead = time(local:N) / time(threads:N) - 1 (target <= 5 %); throughput
+per worker = samples / s / N. Run when the machine is quiet::
+
+    python benchmarks/bench_cluster.py                       # ~60 s per render
+    python benchmarks/bench_cluster.py --spp 256 --rounds 5 --chunk-spp 16
+    python benchmarks/bench_cluster.py --json out/bench_cluster.json
+
+The scene defaults to ``scenes/fgf-cube-pink.xml`` at ``-D res=128``; choose
+``--spp`` so that one threaded render with 2 threads takes about 60 s on the
+machine (``--calibrate`` prints the spp for that from a short render).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+
+
+def run_once(scene: str, defines: list[str], spp: int, out: Path, extra: list[str]) -> float:
+    cmd = [sys.executable, "-m", "fgf", "render", scene, "--spp", str(spp), "--seed", "1", "-o", str(out), "--quiet"]
+    for d in defines:
+        cmd += ["-D", d]
+    t0 = time.perf_counter()
+    r = subprocess.run(cmd + extra, capture_output=True, text=True)
+    dt = time.perf_counter() - t0
+    if r.returncode != 0:
+        raise SystemExit(f"{' '.join(cmd + extra)} failed: {r.stderr.strip()}")
+    return dt
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("--scene", default=str(ROOT / "scenes" / "fgf-cube-pink.xml"))
+    ap.add_argument("-D", dest="defines", action="append", default=None, help="scene define (default res=128)")
+    ap.add_argument("--spp", type=int, default=512)
+    ap.add_argument("--chunk-spp", type=int, default=16)
+    ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
+    ap.add_argument("--rounds", type=int, default=3)
+    ap.add_argument("--calibrate", action="store_true", help="print the spp of a ~60 s 2-thread render and exit")
+    ap.add_argument("--json", default=None, help="also write the results here")
+    args = ap.parse_args()
+    if args.rounds < 3:
+        ap.error("--rounds must be at least 3 (the median of 3 or more)")
+    defines = args.defines or ["res=128"]
+    with tempfile.TemporaryDirectory() as tmp:
+        t = Path(tmp)
+        if args.calibrate:
+            dt = run_once(args.scene, defines, 8, t / "c.exr", ["--threads", "2"])
+            print(f"8 spp in {dt:.1f} s with 2 threads: use --spp {max(1, round(8 * 60 / dt))} for ~60 s")
+            return 0
+        configs: list[tuple[str, list[str]]] = []
+        for n in args.workers:
+            configs.append((f"threads:{n}", ["--threads", str(n)]))
+            configs.append((f"local:{n}", ["--cluster", f"local:{n}", "--chunk-spp", str(args.chunk_spp)]))
+        times: dict[str, list[float]] = {name: [] for name, _ in configs}
+        reference = None
+        for r in range(args.rounds):
+            order = configs if r % 2 == 0 else configs[::-1]
+            for name, extra in order:
+                out = t / f"{name.replace(':', '_')}.exr"
+                times[name].append(run_once(args.scene, defines, args.spp, out, extra))
+                data = out.read_bytes()
+                if reference is None:
+                    reference = data
+                elif data != reference:
+                    raise SystemExit(f"{name}: the image differs from the first render (bit-identity broken)")
+                print(f"round {r + 1}: {name:10s} {times[name][-1]:7.1f} s", file=sys.stderr, flush=True)
+    import fgf
+
+    p = fgf._core.prepare_scene(args.scene, [tuple(d.split("=", 1)) for d in defines])
+    samples = p.width * p.height * args.spp
+    results = {"scene": args.scene, "defines": defines, "spp": args.spp, "chunk_spp": args.chunk_spp,
+               "rounds": args.rounds, "cpu_count": os.cpu_count(), "load_avg": os.getloadavg(), "configs": {}}
+    print(f"{'config':10s} {'median s':>9s} {'Msamples/s':>11s} {'per worker':>11s} {'overhead':>9s}")
+    for n in args.workers:
+        base = statistics.median(times[f"threads:{n}"])
+        for name in (f"threads:{n}", f"local:{n}"):
+            med = statistics.median(times[name])
+            rate = samples / med / 1e6
+            over = med / base - 1.0
+            results["configs"][name] = {"times": times[name], "median": med, "msamples_per_s": rate,
+                                        "per_worker": rate / n, "overhead_vs_threads": over}
+            print(f"{name:10s} {med:9.1f} {rate:11.3f} {rate / n:11.3f} {100 * over:8.1f}%")
+    if args.json:
+        Path(args.json).write_text(json.dumps(results, indent=1))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,233 @@
+"""Renders and ensembles in chunks, on a Dask ``LocalCluster`` of 2 worker
+processes and on one machine with checkpoints (``fgf.cluster``,
+``docs/cluster.md``).
+
+Everything here is exact: fixed-point pixel sums (``docs/theory.md`` §7.17)
+make a chunked render bit-identical to the single-process render for any
+chunk size and worker count, so the checks are ``array_equal``, not
+tolerances.
+"""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import fgf
+from fgf import cluster
+
+distributed = pytest.importorskip("distributed", reason="fgf[cluster] (dask[distributed]) is installed by the test command")
+
+ROOT = Path(__file__).resolve().parents[1]
+# A heterogeneous medium read from a .vol next to the scene: shipping the
+# scene's files to the workers is exercised too.
+SCENE = ROOT / "scenes" / "reference" / "cube-heterogeneous.xml"
+SMALL = [("res", "12")]
+PINK = ROOT / "scenes" / "fgf-cube-pink.xml"
+KFBM = ROOT / "scenes" / "fgf-cube-2fbm.xml"
+
+
+@pytest.fixture(scope="module")
+def client():
+    with cluster.open_client("local:2") as c:
+        yield c
+
+
+def reference(spp: int, seed: int, variance: bool = True):
+    return fgf.render(SCENE, spp=spp, seed=seed, defines=dict(SMALL), progress=False, return_variance=variance)
+
+
+@pytest.mark.parametrize("chunk_spp", [1, 4])
+def test_cluster_render_is_bit_identical(client, chunk_spp):
+    img, var = reference(6, 5)
+    run = cluster.render(
+        SCENE, spp=6, seed=5, defines=SMALL, progress=False, return_variance=True, client=client, chunk_spp=chunk_spp
+    )
+    assert run.spp_done == 6 and not run.interrupted and run.lost is None
+    assert np.array_equal(run.image, img)
+    assert np.array_equal(run.variance, var)
+
+
+def test_fgf_render_client_keyword(client):
+    img = fgf.render(SCENE, spp=3, seed=1, defines=dict(SMALL), progress=False, client=client, chunk_spp=2)
+    assert np.array_equal(img, reference(3, 1, variance=False))
+
+
+def test_sample_ranges_merge_in_any_order():
+    prep = fgf._core.prepare_scene(str(SCENE), SMALL)
+    parts = [cluster.render_chunk(prep, a, b, seed=9, variance=True) for a, b in [(3, 5), (0, 1), (5, 7), (1, 3)]]
+    total = parts[0]
+    for p in parts[1:]:
+        total.merge(p)
+    assert total.ranges == [(0, 7)]
+    img, var = total.finish(7)
+    ref_img, ref_var = reference(7, 9)
+    assert np.array_equal(img, ref_img) and np.array_equal(var, ref_var)
+    with pytest.raises(fgf.ParameterError, match="merged twice"):
+        total.merge(cluster.render_chunk(prep, 2, 3, seed=9, variance=True))
+
+
+@pytest.mark.parametrize("realizations", [2, 3])
+def test_cluster_ensemble_is_bit_identical(client, realizations):
+    args = dict(resolution=8, spp=1, seed=4, defines={"res": 8}, progress=False, return_info=True)
+    mean, se, info = fgf.ensemble(PINK, realizations, **args)
+    cmean, cse, cinfo = fgf.ensemble(PINK, realizations, client=client, **args)
+    assert np.array_equal(mean, cmean)
+    assert np.array_equal(se, cse, equal_nan=True)
+    assert cinfo["realizations_done"] == realizations
+    for m, c in zip(info["media"], cinfo["media"]):
+        assert m["realized_variance"] == c["realized_variance"]
+        assert m["clamped_fraction"] == pytest.approx(c["clamped_fraction"], rel=1e-12, abs=1e-15)
+
+
+def test_ensemble_checkpoint_resumes_with_more_realizations(tmp_path):
+    args = dict(resolution=8, spp=1, seed=2, defines={"res": 8}, progress=False)
+    ck = tmp_path / "ens.ckpt"
+    fgf.ensemble(PINK, 2, checkpoint=ck, **args)
+    mean, se = fgf.ensemble(PINK, 3, checkpoint=ck, **args)
+    ref_mean, ref_se = fgf.ensemble(PINK, 3, **args)
+    assert np.array_equal(mean, ref_mean) and np.array_equal(se, ref_se)
+    with pytest.raises(fgf.ParameterError, match="different --resolution"):
+        fgf.ensemble(PINK, 3, checkpoint=ck, **dict(args, resolution=10))
+
+
+@pytest.mark.parametrize("nodes", [2, 3])
+def test_cluster_truth_is_bit_identical(client, nodes, tmp_path):
+    args = dict(spp=2, nodes=nodes, seed=6, defines={"res": 8}, progress=False, return_stderr=True)
+    img, se = fgf.truth(KFBM, **args)
+    cimg, cse = fgf.truth(KFBM, client=client, checkpoint=tmp_path / "truth.ckpt", **args)
+    assert np.array_equal(img, cimg) and np.array_equal(se, cse)
+    # Resumed entirely from the checkpoint: the same bits again.
+    rimg, rse = fgf.truth(KFBM, checkpoint=tmp_path / "truth.ckpt", **args)
+    assert np.array_equal(img, rimg) and np.array_equal(se, rse)
+
+
+def test_checkpoint_interrupted_and_resumed_is_identical(tmp_path):
+    ck = tmp_path / "render.ckpt"
+    calls = []
+
+    def interrupt_after_first_chunk(done, total):
+        # Ctrl-C once the first chunk (2 samples of 12x12 pixels) is in.
+        if done > 12 * 12 * 2 and not calls:
+            calls.append(done)
+            os.kill(os.getpid(), signal.SIGINT)
+
+    run = cluster.render(
+        SCENE, spp=8, seed=2, defines=SMALL, progress=interrupt_after_first_chunk, return_variance=True,
+        chunk_spp=2, checkpoint=ck, threads=1,
+    )
+    assert calls and run.interrupted and 2 <= run.spp_done < 8 and ck.exists()
+    resumed = cluster.render(
+        SCENE, spp=8, seed=2, defines=SMALL, progress=False, return_variance=True, chunk_spp=3, checkpoint=ck
+    )
+    assert resumed.resumed_spp == run.spp_done and resumed.spp_done == 8
+    img, var = reference(8, 2)
+    assert np.array_equal(resumed.image, img) and np.array_equal(resumed.variance, var)
+
+
+def test_checkpoint_spp_may_be_raised_on_resume(tmp_path, client):
+    ck = tmp_path / "render.ckpt"
+    cluster.render(SCENE, spp=4, seed=3, defines=SMALL, progress=False, chunk_spp=2, checkpoint=ck)
+    run = cluster.render(SCENE, spp=9, seed=3, defines=SMALL, progress=False, chunk_spp=2, checkpoint=ck, client=client)
+    assert run.resumed_spp == 4
+    assert np.array_equal(run.image, reference(9, 3, variance=False))
+
+
+def fgf_cli(*args: str, timeout: float = 120) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-m", "fgf", *args], capture_output=True, text=True, timeout=timeout)
+
+
+def test_mismatched_checkpoint_is_refused(tmp_path):
+    ck = tmp_path / "render.ckpt"
+    base = ["render", str(SCENE), "-D", "res=12", "--spp", "2", "--checkpoint", str(ck), "--quiet"]
+    assert fgf_cli(*base, "--seed", "1", "-o", str(tmp_path / "a.exr")).returncode == 0
+    before = ck.read_bytes()
+    r = fgf_cli(*base, "--seed", "2", "-o", str(tmp_path / "b.exr"))
+    assert r.returncode == 2 and "different --seed" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    r = fgf_cli(*[a if a != "res=12" else "res=10" for a in base], "--seed", "1", "-o", str(tmp_path / "c.exr"))
+    assert r.returncode == 2 and "different scene" in r.stderr, r.stderr
+    # A lower --spp than the checkpoint holds cannot be honoured.
+    r = fgf_cli(*[a if a != "2" else "1" for a in base], "--seed", "1", "-o", str(tmp_path / "d.exr"))
+    assert r.returncode == 2 and "must be at least" in r.stderr, r.stderr
+    assert ck.read_bytes() == before
+    assert not (tmp_path / "b.exr").exists() and not (tmp_path / "c.exr").exists()
+
+
+def test_unreachable_scheduler_is_one_line_within_timeout(tmp_path):
+    t0 = time.monotonic()
+    r = fgf_cli("render", str(SCENE), "-D", "res=8", "--spp", "1", "-o", str(tmp_path / "x.exr"),
+                "--cluster", "tcp://127.0.0.1:9", timeout=60)
+    assert r.returncode == 2
+    assert "no Dask scheduler answered" in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
+    assert time.monotonic() - t0 < 45
+    assert not (tmp_path / "x.exr").exists()
+
+
+def test_bad_cluster_address_and_missing_extra(tmp_path):
+    r = fgf_cli("render", str(SCENE), "--spp", "1", "-o", str(tmp_path / "x.exr"), "--cluster", "localhost")
+    assert r.returncode == 2 and "expected local, local:N or tcp://host:port" in r.stderr, r.stderr
+    code = (
+        "import sys; sys.modules['distributed'] = None\n"
+        "from fgf.cli import main\n"
+        f"sys.exit(main(['render', {str(SCENE)!r}, '--spp', '1', '-o', {str(tmp_path / 'y.exr')!r}, '--cluster', 'local:1']))"
+    )
+    r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert r.returncode == 2 and "pip install 'fgf[cluster]'" in r.stderr, r.stderr
+
+
+def test_cli_cluster_render_matches_threads(tmp_path, client):
+    a, b = tmp_path / "a.exr", tmp_path / "b.exr"
+    assert fgf_cli("render", str(SCENE), "-D", "res=12", "--spp", "4", "--seed", "7", "-o", str(a), "--quiet").returncode == 0
+    r = fgf_cli("render", str(SCENE), "-D", "res=12", "--spp", "4", "--seed", "7", "-o", str(b), "--quiet",
+                "--cluster", client.scheduler.address, "--chunk-spp", "3")
+    assert r.returncode == 0, r.stderr
+    assert a.read_bytes() == b.read_bytes()
+
+
+def test_worker_killed_mid_render_gives_the_same_image(client):
+    pids = client.run(os.getpid)
+    victim = sorted(pids.values())[0]
+    killed = []
+
+    def kill_one_worker(done, total):
+        if not killed:
+            killed.append(victim)
+            os.kill(victim, signal.SIGKILL)
+
+    # Enough chunks that both workers are busy when the first one returns.
+    run = cluster.render(
+        SCENE, spp=24, seed=11, defines=[("res", "16")], progress=kill_one_worker, return_variance=True,
+        client=client, chunk_spp=1,
+    )
+    assert killed and run.spp_done == 24 and run.lost is None
+    img, var = fgf.render(SCENE, spp=24, seed=11, defines={"res": 16}, progress=False, return_variance=True)
+    assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
+    assert victim not in client.run(os.getpid).values()
+
+
+def test_sample_outside_the_exact_range_is_an_error_not_a_wrong_image(tmp_path):
+    # A sky of radiance 1e28: 8 samples sum past 2^95 ≈ 4e28.
+    scene = tmp_path / "bright.xml"
+    scene.write_text("""<scene version="3.0.0">
+  <integrator type="volpath"><integer name="max_depth" value="2"/></integrator>
+  <sensor type="perspective">
+    <float name="fov" value="30"/>
+    <transform name="to_world"><lookat origin="0, 0, 5" target="0, 0, 0" up="0, 1, 0"/></transform>
+    <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+    <film type="hdrfilm"><integer name="width" value="2"/><integer name="height" value="2"/>
+      <rfilter type="box"/></film>
+  </sensor>
+  <emitter type="constant"><rgb name="radiance" value="1e28"/></emitter>
+</scene>
+""")
+    assert np.allclose(fgf.render(scene, spp=2, progress=False), 1e28, rtol=1e-6)
+    r = fgf_cli("render", str(scene), "-o", str(tmp_path / "b.exr"))
+    assert r.returncode == 2 and "outside the exact accumulator's range" in r.stderr, r.stderr
+    assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "b.exr").exists()
