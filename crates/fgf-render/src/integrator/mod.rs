@@ -168,7 +168,7 @@ impl World {
                     }
                 }
             }
-            let bsdf = self.bsdfs[info.bsdf as usize];
+            let bsdf = &self.bsdfs[info.bsdf as usize];
             if bsdf.is_null() {
                 // Index-matched boundary: continue straight on; a new segment starts.
                 medium = info.target_medium(h.n, ray.d, medium);
@@ -204,7 +204,7 @@ impl World {
                 let vertex = SurfaceVertex {
                     hit: &h,
                     info: &info,
-                    bsdf: &bsdf,
+                    bsdf,
                     frame: &frame,
                     wi_local,
                     medium,
