@@ -273,6 +273,21 @@ pub enum EmitterDesc {
     Directional { direction: Vec3, irradiance: Rgb },
     /// `constant`: environment radiance from every direction.
     Constant { radiance: Rgb },
+    /// `envmap`: a latitude–longitude image of the environment radiance
+    /// (already multiplied by `scale`); `to_world` rotates it (local +y is
+    /// up, the image's top row).
+    Envmap {
+        image: Arc<RgbImage>,
+        to_world: Mat4,
+    },
+}
+
+/// A linear RGB image, row-major from the top row, 3 floats per pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub data: Vec<f32>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -339,12 +339,12 @@ impl SceneDesc {
         let mut environment = None;
         for (i, e) in self.emitters.iter().enumerate() {
             check_emitter(e).map_err(at(Subject::Emitter(i)))?;
-            if let EmitterDesc::Constant { .. } = e {
+            if let EmitterDesc::Constant { .. } | EmitterDesc::Envmap { .. } = e {
                 if let Some(first) = environment {
                     return Err(at(Subject::Emitter(i))((
                         None,
                         format!(
-                            "more than one constant environment emitter (the first: {})",
+                            "more than one constant environment emitter or envmap (the first: {})",
                             name(Subject::Emitter(first))
                         ),
                     )));
@@ -592,6 +592,27 @@ fn check_emitter(e: &EmitterDesc) -> Check {
             range_rgb("irradiance", irradiance, NON_NEGATIVE)
         }
         EmitterDesc::Constant { radiance } => range_rgb("radiance", radiance, NON_NEGATIVE),
+        EmitterDesc::Envmap { image, to_world } => {
+            if image.width < 2
+                || image.height < 3
+                || image.data.len() != image.width * image.height * 3
+            {
+                return fail(
+                    None,
+                    "the environment map must be at least 2x3 pixels of RGB",
+                );
+            }
+            if !image.data.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return fail(
+                    None,
+                    "the environment map has negative or non-finite pixels",
+                );
+            }
+            if !(to_world.determinant().abs() > 1e-12) || !to_world.is_finite() {
+                return fail(None, "the envmap's to_world must be invertible");
+            }
+            Ok(())
+        }
     }
 }
 

@@ -87,3 +87,16 @@ pub fn fresnel_diffuse_reflectance(eta: f32) -> f32 {
     }
     (sum / n as f64) as f32
 }
+
+/// The internal diffuse reflectance of a coating of relative index `eta`
+/// (inside over outside), by the polynomial fits of Egan & Hilgeman (1973)
+/// that Mitsuba 3's `plastic` uses (within ~1e-3 of
+/// [`fresnel_diffuse_reflectance`]`(1/eta)`, the exact average, which
+/// would make fgf's `plastic` differ from Mitsuba's by ~0.1 %).
+pub fn fresnel_diffuse_reflectance_fit(eta: f32) -> f32 {
+    if eta >= 1.0 {
+        -1.4399 / (eta * eta) + 0.7099 / eta + 0.6681 + 0.0636 * eta
+    } else {
+        -0.4399 + 0.7099 / eta - 0.3319 / (eta * eta) + 0.0636 / (eta * eta * eta)
+    }
+}

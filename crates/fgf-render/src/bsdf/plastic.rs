@@ -14,7 +14,7 @@
 //!   `(1 - t_i)·w_s` and `t_i·(1 - w_s)`, `w_s = s̄/(s̄ + d̄)` from the means
 //!   of the specular and diffuse reflectances.
 
-use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance};
+use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance_fit};
 use super::microfacet::{reflect, Microfacet};
 use super::BsdfSample;
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
@@ -91,7 +91,7 @@ impl Plastic {
                 diffuse,
                 specular,
                 nonlinear,
-                fresnel_diffuse_reflectance(1.0 / eta),
+                fresnel_diffuse_reflectance_fit(eta),
             ),
         }
     }

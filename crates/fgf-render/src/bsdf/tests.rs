@@ -332,3 +332,17 @@ fn beckmann_visible_normals_have_unit_projected_area() {
         }
     }
 }
+
+/// The fit of the internal diffuse reflectance is within 2e-3 of the exact
+/// hemispherical average.
+#[test]
+fn diffuse_reflectance_fit_is_close_to_exact() {
+    for eta in [1.2f32, 1.33, 1.49, 1.7, 2.0] {
+        let fit = fresnel::fresnel_diffuse_reflectance_fit(eta);
+        let exact = fresnel::fresnel_diffuse_reflectance(1.0 / eta);
+        assert!(
+            (fit - exact).abs() < 2e-3,
+            "eta {eta}: fit {fit} exact {exact}"
+        );
+    }
+}

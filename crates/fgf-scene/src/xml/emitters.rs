@@ -40,7 +40,7 @@ use super::document::XNode;
 use super::props::{check_if, Props};
 use crate::desc::*;
 use crate::error::SceneError;
-use crate::validate::{BEAM_WIDTH, CUTOFF_ANGLE, NON_NEGATIVE};
+use crate::validate::{BEAM_WIDTH, CUTOFF_ANGLE, NON_NEGATIVE, SCALE};
 use glam::{DVec3, Mat4, Vec3};
 
 pub(crate) fn emitter_desc(
@@ -61,7 +61,7 @@ pub(crate) fn emitter_desc(
         let ty = plugin_type(
             n,
             "emitter",
-            &["area", "point", "spot", "directional", "constant"],
+            &["area", "point", "spot", "directional", "constant", "envmap"],
         )?;
         if ty == "area" {
             return Err(n.err("an 'area' emitter must be nested inside the <shape> that emits"));
@@ -72,6 +72,7 @@ pub(crate) fn emitter_desc(
         "area" | "constant" => &["radiance"],
         "point" => &["intensity", "position", "to_world"],
         "spot" => &["intensity", "to_world", "cutoff_angle", "beam_width"],
+        "envmap" => &["filename", "scale", "to_world"],
         _ => &["irradiance", "direction", "to_world"],
     };
     let p = Props::new(n, &ctx.ids, known)?;
@@ -82,6 +83,51 @@ pub(crate) fn emitter_desc(
         "constant" => EmitterDesc::Constant {
             radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),
         },
+        "envmap" => {
+            let (file, fnode) = p.string("filename")?.ok_or_else(|| {
+                n.err("missing required parameter 'filename' (a lat-long .exr or .hdr image, relative to the scene file)")
+            })?;
+            let path = fnode.resolve(file);
+            let ext = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase());
+            let read = match ext.as_deref() {
+                Some("exr") => fgf_io::image::read_exr_rgb(&path),
+                Some("hdr") | Some("rgbe") | Some("pic") => fgf_io::image::read_hdr_rgb(&path),
+                _ => {
+                    return Err(fnode.err(format!(
+                        "envmap image '{file}': only OpenEXR (.exr) and Radiance RGBE (.hdr) images are supported"
+                    )))
+                }
+            };
+            let (width, height, mut data) =
+                read.map_err(|e| fnode.err(format!("cannot read envmap image: {e}")))?;
+            if width < 2 || height < 3 {
+                return Err(fnode.err(format!(
+                    "envmap image '{file}' is {width}x{height}; it must be at least 2x3 pixels"
+                )));
+            }
+            if let Some(bad) = data.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(fnode.err(format!(
+                    "envmap image '{file}' has a pixel value {bad} (valid: finite and >= 0)"
+                )));
+            }
+            let scale = p.float_in("scale", 1.0, SCALE)? as f32;
+            data.iter_mut().for_each(|v| *v *= scale);
+            let to_world = match p.transform("to_world")? {
+                Some((m, node)) => to_invertible_mat4(node, m)?,
+                None => Mat4::IDENTITY,
+            };
+            EmitterDesc::Envmap {
+                image: std::sync::Arc::new(RgbImage {
+                    width,
+                    height,
+                    data,
+                }),
+                to_world,
+            }
+        }
         "point" => {
             let intensity = rgb(p.color_in("intensity", [1.0; 3], NON_NEGATIVE)?);
             let position = match (p.vec3("position")?, p.transform("to_world")?) {
