@@ -240,21 +240,30 @@ impl Bsdf {
     }
 
     /// `f(wi, wo)·|wo.z|` and the pdf of sampling `wo` (zero for delta lobes).
+    ///
+    /// The diffuse case stays inline (the hot path of the reference scenes);
+    /// the other models are evaluated out of line.
+    #[inline]
     pub fn eval_pdf(&self, mut wi: Vec3, mut wo: Vec3) -> (Spectrum, f32) {
         if self.twosided && wi.z < 0.0 {
             wi.z = -wi.z;
             wo.z = -wo.z;
         }
-        match &self.kind {
-            BsdfKind::Diffuse { reflectance } => {
-                if wi.z <= 0.0 || wo.z <= 0.0 {
-                    return (Spectrum::ZERO, 0.0);
-                }
-                (
-                    *reflectance * (FRAC_1_PI * wo.z),
-                    cosine_hemisphere_pdf(wo.z),
-                )
+        if let BsdfKind::Diffuse { reflectance } = &self.kind {
+            if wi.z <= 0.0 || wo.z <= 0.0 {
+                return (Spectrum::ZERO, 0.0);
             }
+            return (
+                *reflectance * (FRAC_1_PI * wo.z),
+                cosine_hemisphere_pdf(wo.z),
+            );
+        }
+        self.eval_pdf_glossy(wi, wo)
+    }
+
+    #[inline(never)]
+    fn eval_pdf_glossy(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        match &self.kind {
             BsdfKind::RoughConductor(b) => b.eval_pdf(wi, wo),
             BsdfKind::RoughDielectric(b) => b.eval_pdf(wi, wo),
             BsdfKind::Plastic(b) => b.eval_pdf(wi, wo),

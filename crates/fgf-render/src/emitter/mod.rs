@@ -132,16 +132,6 @@ impl Emitter {
     /// Sample a direction toward the light from `p`.
     pub fn sample(&self, geom: &Geometry, p: Vec3, u_sel: f32, u: [f32; 2]) -> Option<LightSample> {
         match *self {
-            Emitter::Envmap(ref e) => {
-                let (wi, value, pdf) = e.sample(u)?;
-                Some(LightSample {
-                    wi,
-                    dist: f32::INFINITY,
-                    value,
-                    pdf,
-                    delta: false,
-                })
-            }
             Emitter::Area { shape, radiance } => {
                 let ps = geom.sample_shape(shape as usize, u_sel, u);
                 let v = ps.p - p;
@@ -214,6 +204,16 @@ impl Emitter {
                 pdf: UNIFORM_SPHERE_PDF,
                 delta: false,
             }),
+            Emitter::Envmap(ref e) => {
+                let (wi, value, pdf) = e.sample(u)?;
+                Some(LightSample {
+                    wi,
+                    dist: f32::INFINITY,
+                    value,
+                    pdf,
+                    delta: false,
+                })
+            }
         }
     }
 }

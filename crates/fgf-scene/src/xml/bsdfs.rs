@@ -1,7 +1,14 @@
 //! `<bsdf>`: `diffuse` (Lambertian, one-sided: black seen from the back),
 //! `null` (an index-matched boundary that paths cross unchanged, for media
-//! boundaries), `dielectric` (smooth), `conductor` (a smooth metal) and
-//! `twosided` (the nested BSDF on both sides). A `<bsdf>` at the top level
+//! boundaries), `dielectric` (smooth), `thindielectric` (a thin smooth slab:
+//! reflects and passes straight through), `roughdielectric`, `conductor` (a
+//! smooth metal), `roughconductor`, `plastic` and `roughplastic` (a diffuse
+//! base under a dielectric coating, Mitsuba 3's model) and `twosided` (the
+//! nested BSDF on both sides). The rough plugins use a microfacet
+//! distribution (Walter et al. 2007) sampled through its visible normals
+//! (Heitz 2018) unless `sample_visible` is false. Textures as parameters,
+//! anisotropic roughness, `mask` and `principled` are refused with a
+//! message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -13,6 +20,16 @@
 //! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
 //! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
 //! | `conductor` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | |
+//! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | reflectance `2R/(1+R)` of the two faces; the rest is transmitted undeviated |
+//! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
+//! | `roughconductor` | `material`, `eta`, `k`, `specular_reflectance` | as `conductor` | | | as `conductor` | |
+//! | rough plugins | `distribution` | string | – | `"beckmann"`, `"ggx"` | `"beckmann"` | microfacet normal distribution |
+//! | rough plugins | `alpha` | float | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
+//! | rough plugins | `sample_visible` | boolean | – | – | true | sample only the normals visible from the incident direction |
+//! | `plastic`, `roughplastic` | `int_ior`, `ext_ior` | float or string | – | as `dielectric`, not equal | `"polypropylene"` (1.49), `"air"` | the coating's indices |
+//! | `plastic`, `roughplastic` | `diffuse_reflectance` | float or rgb | – | in [0, 1] | 0.5 | the base |
+//! | `plastic`, `roughplastic` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | scales the coating's reflection |
+//! | `plastic`, `roughplastic` | `nonlinear` | boolean | – | – | false | account for the colour shift of internal scattering (`ρ/(1 - ρ F_int)` instead of `ρ/(1 - F_int)`) |
 //! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
 //!
 //! ```xml
@@ -22,6 +39,13 @@
 //! <shape type="sphere"><ref id="gold"/></shape>
 //! <shape type="rectangle">
 //!     <bsdf type="diffuse"><rgb name="reflectance" value="$albedo"/></bsdf>
+//! </shape>
+//! <shape type="sphere">
+//!     <bsdf type="roughplastic">
+//!         <string name="distribution" value="ggx"/>
+//!         <float name="alpha" value="0.2"/>
+//!         <rgb name="diffuse_reflectance" value="0.8, 0.3, 0.1"/>
+//!     </bsdf>
 //! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
 //! ```

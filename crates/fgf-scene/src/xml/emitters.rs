@@ -1,6 +1,7 @@
 //! `<emitter>`: `area` (nested in the `<shape>` that emits; it emits toward
 //! the side its normal points to), and at the top level `point`, `spot`,
-//! `directional` and `constant` (a uniform environment; at most one). Every
+//! `directional`, `constant` (a uniform environment) and `envmap` (an image
+//! of the environment; at most one environment emitter). Every
 //! colour is `≥ 0` in each channel; radiometric units are described in
 //! [`super`].
 //!
@@ -15,6 +16,9 @@
 //! | `spot` | `beam_width` | float | degrees | 0 ≤ beam_width ≤ cutoff_angle | 0.75 · cutoff_angle | full intensity within it, then falling linearly in the angle to 0 at `cutoff_angle` |
 //! | `directional` | `irradiance` | float or rgb | power/length² | ≥ 0 | 1 | on a surface facing the light |
 //! | `directional` | `direction` or `to_world` | vector or transform | – | a nonzero vector | +z (the local +z of `to_world`) | the direction the light travels in; not both |
+//! | `envmap` | `filename` | string | – | an OpenEXR (`.exr`) or Radiance RGBE (`.hdr`) latitude–longitude image of at least 2x3 pixels, relative to the scene file | required | linear RGB radiance; the top row is local +y, `u = atan2(x, -z)/2π` |
+//! | `envmap` | `scale` | float | – | ≥ 0 | 1 | multiplies the image |
+//! | `envmap` | `to_world` | transform | – | invertible | identity | orients the map (usually a rotation) |
 //!
 //! ```xml
 //! <emitter type="spot">
@@ -27,6 +31,11 @@
 //! <shape type="rectangle">
 //!     <emitter type="area"><rgb name="radiance" value="10"/></emitter>
 //! </shape>
+//! <emitter type="envmap">
+//!     <string name="filename" value="sky.exr"/>
+//!     <float name="scale" value="0.5"/>
+//!     <transform name="to_world"><rotate y="1" angle="90"/></transform>
+//! </emitter>
 //! <default name="power" value="50"/>
 //! ```
 //!
