@@ -1063,8 +1063,8 @@ fn unknown_plugin_lists_the_supported_ones() {
         &["unknown integrator type 'direct'", "volpath, path"],
     );
     has(
-        &err(r#"<emitter type="envmap"/>"#),
-        &["unknown emitter type 'envmap'"],
+        &err(r#"<emitter type="projector"/>"#),
+        &["unknown emitter type 'projector'"],
     );
     has(
         &err(r#"<sensor type="orthographic"/>"#),
