@@ -608,7 +608,7 @@ fn check_emitter(e: &EmitterDesc) -> Check {
                     "the environment map has negative or non-finite pixels",
                 );
             }
-            if !(to_world.determinant().abs() > 1e-12) || !to_world.is_finite() {
+            if !to_world.is_finite() || to_world.determinant().abs() <= 1e-12 {
                 return fail(None, "the envmap's to_world must be invertible");
             }
             Ok(())
