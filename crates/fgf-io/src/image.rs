@@ -167,6 +167,116 @@ pub fn write_png_preview(
     write_png8(path, width, height, channels, &to_srgb8(data, exposure))
 }
 
+/// Read a Radiance `.hdr` (RGBE) image: flat or new-style run-length
+/// encoded scanlines, `-Y h +X w` orientation (the common one). Returns
+/// `(width, height, rgb)` with rows from the top, linear floats.
+pub fn read_hdr_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
+    let bytes = std::fs::read(path).map_err(|e| IoError::format(path, e.to_string()))?;
+    let bad = |m: &str| IoError::format(path, format!("not a Radiance RGBE image: {m}"));
+    if !(bytes.starts_with(b"#?RADIANCE") || bytes.starts_with(b"#?RGBE")) {
+        return Err(bad("missing '#?RADIANCE' header"));
+    }
+    // Header lines up to an empty line, then the resolution line.
+    let mut pos = 0usize;
+    let mut line = || -> Option<&[u8]> {
+        let start = pos;
+        let end = start + bytes[start..].iter().position(|&c| c == b'\n')?;
+        pos = end + 1;
+        Some(&bytes[start..end])
+    };
+    loop {
+        let l = line().ok_or_else(|| bad("truncated header"))?;
+        if l.is_empty() {
+            break;
+        }
+        if let Some(f) = l.strip_prefix(b"FORMAT=") {
+            if f != b"32-bit_rle_rgbe" {
+                return Err(bad("only FORMAT=32-bit_rle_rgbe is supported"));
+            }
+        }
+    }
+    let res = line().ok_or_else(|| bad("missing resolution line"))?;
+    let res = std::str::from_utf8(res).map_err(|_| bad("bad resolution line"))?;
+    let f: Vec<&str> = res.split_whitespace().collect();
+    if f.len() != 4 || f[0] != "-Y" || f[2] != "+X" {
+        return Err(bad(
+            "only the '-Y height +X width' orientation is supported",
+        ));
+    }
+    let (h, w): (usize, usize) = match (f[1].parse(), f[3].parse()) {
+        (Ok(h), Ok(w)) if h > 0 && w > 0 && h <= 1 << 15 && w <= 1 << 15 => (h, w),
+        _ => return Err(bad("bad image size")),
+    };
+    let mut data = vec![0f32; w * h * 3];
+    let mut p = pos;
+    let mut scan = vec![[0u8; 4]; w];
+    let byte = |i: usize| {
+        bytes
+            .get(i)
+            .copied()
+            .ok_or_else(|| bad("truncated pixel data"))
+    };
+    for y in 0..h {
+        let rle = (8..0x8000).contains(&w)
+            && byte(p)? == 2
+            && byte(p + 1)? == 2
+            && byte(p + 2)? & 0x80 == 0;
+        if rle {
+            if ((byte(p + 2)? as usize) << 8 | byte(p + 3)? as usize) != w {
+                return Err(bad("scanline width mismatch"));
+            }
+            p += 4;
+            for c in 0..4 {
+                let mut x = 0usize;
+                while x < w {
+                    let n = byte(p)? as usize;
+                    p += 1;
+                    if n > 128 {
+                        let run = n - 128;
+                        let v = byte(p)?;
+                        p += 1;
+                        if x + run > w {
+                            return Err(bad("run past the end of a scanline"));
+                        }
+                        for px in &mut scan[x..x + run] {
+                            px[c] = v;
+                        }
+                        x += run;
+                    } else {
+                        if n == 0 || x + n > w {
+                            return Err(bad("bad run length"));
+                        }
+                        for px in &mut scan[x..x + n] {
+                            px[c] = byte(p)?;
+                            p += 1;
+                        }
+                        x += n;
+                    }
+                }
+            }
+        } else {
+            for px in scan.iter_mut() {
+                for (c, v) in px.iter_mut().enumerate() {
+                    *v = byte(p + c)?;
+                }
+                p += 4;
+            }
+        }
+        for (x, px) in scan.iter().enumerate() {
+            let i = (y * w + x) * 3;
+            if px[3] != 0 {
+                // mantissa · 2^(e - 136) (Walter's RGBE decoding, which
+                // Mitsuba 3 uses; Radiance itself adds 0.5 to the mantissa).
+                let f = 2f32.powi(px[3] as i32 - 136);
+                for c in 0..3 {
+                    data[i + c] = px[c] as f32 * f;
+                }
+            }
+        }
+    }
+    Ok((w, h, data))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -45,7 +45,7 @@ pub struct World {
     pub shapes: Vec<ShapeInfo>,
     pub bsdfs: Vec<Bsdf>,
     pub emitters: Vec<Emitter>,
-    /// Index of the `constant` environment emitter, if any.
+    /// Index of the environment emitter (`constant` or `envmap`), if any.
     pub env: Option<u32>,
     pub media: Vec<Medium>,
     pub camera: Camera,
@@ -99,7 +99,7 @@ impl World {
         let mut env = None;
         for e in &desc.emitters {
             let em = Emitter::from_desc(e, None);
-            if let Emitter::Constant { .. } = em {
+            if em.is_environment() {
                 env = Some(emitters.len() as u32);
             }
             emitters.push(em);

@@ -203,6 +203,56 @@ pub enum BsdfDesc {
     },
     /// `twosided`: the nested BSDF on both sides.
     TwoSided(Box<BsdfDesc>),
+    /// `thindielectric`: a thin slab with two smooth faces.
+    ThinDielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: Rgb,
+        specular_transmittance: Rgb,
+    },
+    /// `roughconductor`: as [`BsdfDesc::Conductor`] on a microfacet distribution.
+    RoughConductor {
+        eta: Rgb,
+        k: Rgb,
+        specular_reflectance: Rgb,
+        perfect_mirror: bool,
+        microfacet: MicrofacetDesc,
+    },
+    /// `roughdielectric`: as [`BsdfDesc::Dielectric`] on a microfacet distribution.
+    RoughDielectric {
+        int_ior: f32,
+        ext_ior: f32,
+        specular_reflectance: Rgb,
+        specular_transmittance: Rgb,
+        microfacet: MicrofacetDesc,
+    },
+    /// `plastic` (`microfacet: None`) and `roughplastic` (isotropic
+    /// distribution): a diffuse base under a dielectric coating.
+    Plastic {
+        int_ior: f32,
+        ext_ior: f32,
+        diffuse_reflectance: Rgb,
+        specular_reflectance: Rgb,
+        nonlinear: bool,
+        microfacet: Option<MicrofacetDesc>,
+    },
+}
+
+/// Mitsuba's `distribution` of a rough BSDF.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum MicrofacetKind {
+    Beckmann,
+    Ggx,
+}
+
+/// A microfacet distribution: `distribution`, `alpha_u`/`alpha_v` (both
+/// `alpha` when isotropic) and `sample_visible`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct MicrofacetDesc {
+    pub kind: MicrofacetKind,
+    pub alpha_u: f32,
+    pub alpha_v: f32,
+    pub sample_visible: bool,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -223,6 +273,21 @@ pub enum EmitterDesc {
     Directional { direction: Vec3, irradiance: Rgb },
     /// `constant`: environment radiance from every direction.
     Constant { radiance: Rgb },
+    /// `envmap`: a latitude–longitude image of the environment radiance
+    /// (already multiplied by `scale`); `to_world` rotates it (local +y is
+    /// up, the image's top row).
+    Envmap {
+        image: Arc<RgbImage>,
+        to_world: Mat4,
+    },
+}
+
+/// A linear RGB image, row-major from the top row, 3 floats per pixel.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RgbImage {
+    pub width: usize,
+    pub height: usize,
+    pub data: Vec<f32>,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -89,6 +89,12 @@ pub(crate) const IOR: Range<f64> = Range {
     ok: |v| v.is_finite() && v > 0.0,
     text: "a number > 0",
 };
+/// Microfacet roughness: below 1e-4 the lobes are too narrow for f32
+/// sampling (use the smooth plugin).
+pub(crate) const ALPHA: Range<f64> = Range {
+    ok: |v| v.is_finite() && (1e-4..=4.0).contains(&v),
+    text: "1e-4 <= alpha <= 4",
+};
 pub(crate) const CUTOFF_ANGLE: Range<f64> = Range {
     ok: |v| v > 0.0 && v < 180.0,
     text: "0 < cutoff_angle < 180 degrees",
@@ -333,12 +339,12 @@ impl SceneDesc {
         let mut environment = None;
         for (i, e) in self.emitters.iter().enumerate() {
             check_emitter(e).map_err(at(Subject::Emitter(i)))?;
-            if let EmitterDesc::Constant { .. } = e {
+            if let EmitterDesc::Constant { .. } | EmitterDesc::Envmap { .. } = e {
                 if let Some(first) = environment {
                     return Err(at(Subject::Emitter(i))((
                         None,
                         format!(
-                            "more than one constant environment emitter (the first: {})",
+                            "more than one constant environment emitter or envmap (the first: {})",
                             name(Subject::Emitter(first))
                         ),
                     )));
@@ -477,7 +483,73 @@ fn check_bsdf(b: &BsdfDesc) -> Check {
             BsdfDesc::TwoSided(_) => fail(None, "twosided BSDFs cannot be nested"),
             _ => check_bsdf(inner),
         },
+        BsdfDesc::ThinDielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+        }
+        | BsdfDesc::RoughDielectric {
+            int_ior,
+            ext_ior,
+            specular_reflectance,
+            specular_transmittance,
+            ..
+        } => {
+            range("int_ior", *int_ior as f64, IOR)?;
+            range("ext_ior", *ext_ior as f64, IOR)?;
+            range_rgb("specular_reflectance", specular_reflectance, UNIT)?;
+            range_rgb("specular_transmittance", specular_transmittance, UNIT)?;
+            if let BsdfDesc::RoughDielectric { microfacet, .. } = b {
+                check_microfacet(microfacet)?;
+            }
+            Ok(())
+        }
+        BsdfDesc::RoughConductor {
+            eta,
+            k,
+            specular_reflectance,
+            microfacet,
+            ..
+        } => {
+            range_rgb("eta", eta, NON_NEGATIVE)?;
+            range_rgb("k", k, NON_NEGATIVE)?;
+            range_rgb("specular_reflectance", specular_reflectance, UNIT)?;
+            check_microfacet(microfacet)
+        }
+        BsdfDesc::Plastic {
+            int_ior,
+            ext_ior,
+            diffuse_reflectance,
+            specular_reflectance,
+            microfacet,
+            ..
+        } => {
+            range("int_ior", *int_ior as f64, IOR)?;
+            range("ext_ior", *ext_ior as f64, IOR)?;
+            if int_ior == ext_ior {
+                return fail(None, "int_ior and ext_ior must differ");
+            }
+            range_rgb("diffuse_reflectance", diffuse_reflectance, UNIT)?;
+            range_rgb("specular_reflectance", specular_reflectance, UNIT)?;
+            if let Some(m) = microfacet {
+                check_microfacet(m)?;
+                if m.alpha_u != m.alpha_v {
+                    return fail(
+                        None,
+                        "roughplastic needs an isotropic roughness (alpha_u = alpha_v)",
+                    );
+                }
+            }
+            Ok(())
+        }
     }
+}
+
+/// Roughness in the range of [`ALPHA`].
+fn check_microfacet(m: &MicrofacetDesc) -> Check {
+    range("alpha_u", m.alpha_u as f64, ALPHA)?;
+    range("alpha_v", m.alpha_v as f64, ALPHA)
 }
 
 fn check_emitter(e: &EmitterDesc) -> Check {
@@ -520,6 +592,27 @@ fn check_emitter(e: &EmitterDesc) -> Check {
             range_rgb("irradiance", irradiance, NON_NEGATIVE)
         }
         EmitterDesc::Constant { radiance } => range_rgb("radiance", radiance, NON_NEGATIVE),
+        EmitterDesc::Envmap { image, to_world } => {
+            if image.width < 2
+                || image.height < 3
+                || image.data.len() != image.width * image.height * 3
+            {
+                return fail(
+                    None,
+                    "the environment map must be at least 2x3 pixels of RGB",
+                );
+            }
+            if !image.data.iter().all(|v| v.is_finite() && *v >= 0.0) {
+                return fail(
+                    None,
+                    "the environment map has negative or non-finite pixels",
+                );
+            }
+            if !to_world.is_finite() || to_world.determinant().abs() <= 1e-12 {
+                return fail(None, "the envmap's to_world must be invertible");
+            }
+            Ok(())
+        }
     }
 }
 

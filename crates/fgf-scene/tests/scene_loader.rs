@@ -1045,9 +1045,9 @@ fn missing_scene_file_is_an_io_error() {
 #[test]
 fn unknown_plugin_lists_the_supported_ones() {
     has(
-        &err("<shape type=\"cube\">\n<bsdf type=\"roughplastic\"/>\n</shape>"),
+        &err("<shape type=\"cube\">\n<bsdf type=\"principled\"/>\n</shape>"),
         &[
-            "test.xml:3:1: <bsdf type=\"roughplastic\"> unknown BSDF type 'roughplastic' (supported: diffuse, null, dielectric, conductor, twosided)",
+            "test.xml:3:1: <bsdf type=\"principled\"> unknown BSDF type 'principled' (supported: diffuse, null, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided)",
         ],
     );
     has(
@@ -1063,8 +1063,8 @@ fn unknown_plugin_lists_the_supported_ones() {
         &["unknown integrator type 'direct'", "volpath, path"],
     );
     has(
-        &err(r#"<emitter type="envmap"/>"#),
-        &["unknown emitter type 'envmap'"],
+        &err(r#"<emitter type="projector"/>"#),
+        &["unknown emitter type 'projector'"],
     );
     has(
         &err(r#"<sensor type="orthographic"/>"#),

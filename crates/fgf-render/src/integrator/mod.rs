@@ -25,7 +25,7 @@ mod direct;
 
 use crate::emitter::Emitter;
 use crate::geometry::Hit;
-use crate::math::{mis_power, Frame, Sampler, UNIFORM_SPHERE_PDF};
+use crate::math::{mis_power, Frame, Sampler};
 use crate::medium::{DistanceEvent, SegmentStart};
 use crate::ray::{offset_point, Ray};
 use crate::spectrum::{max_comp, Spectrum};
@@ -138,11 +138,13 @@ impl World {
                 // Escaped: the environment, if any.
                 if let Some(e) = self.env {
                     if !(depth == 0 && self.hide_emitters) {
-                        if let Emitter::Constant { radiance } = self.emitters[e as usize] {
+                        if let Some((radiance, env_pdf)) =
+                            self.emitters[e as usize].environment(ray.d)
+                        {
                             let w = if specular {
                                 1.0
                             } else {
-                                mis_power(prev_pdf, UNIFORM_SPHERE_PDF * self.select_pdf())
+                                mis_power(prev_pdf, env_pdf * self.select_pdf())
                             };
                             l += thr * radiance * (w * inv_mis);
                         }
@@ -168,7 +170,7 @@ impl World {
                     }
                 }
             }
-            let bsdf = self.bsdfs[info.bsdf as usize];
+            let bsdf = &self.bsdfs[info.bsdf as usize];
             if bsdf.is_null() {
                 // Index-matched boundary: continue straight on; a new segment starts.
                 medium = info.target_medium(h.n, ray.d, medium);
@@ -204,7 +206,7 @@ impl World {
                 let vertex = SurfaceVertex {
                     hit: &h,
                     info: &info,
-                    bsdf: &bsdf,
+                    bsdf,
                     frame: &frame,
                     wi_local,
                     medium,

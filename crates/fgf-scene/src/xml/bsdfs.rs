@@ -1,7 +1,14 @@
 //! `<bsdf>`: `diffuse` (Lambertian, one-sided: black seen from the back),
 //! `null` (an index-matched boundary that paths cross unchanged, for media
-//! boundaries), `dielectric` (smooth), `conductor` (a smooth metal) and
-//! `twosided` (the nested BSDF on both sides). A `<bsdf>` at the top level
+//! boundaries), `dielectric` (smooth), `thindielectric` (a thin smooth slab:
+//! reflects and passes straight through), `roughdielectric`, `conductor` (a
+//! smooth metal), `roughconductor`, `plastic` and `roughplastic` (a diffuse
+//! base under a dielectric coating, Mitsuba 3's model) and `twosided` (the
+//! nested BSDF on both sides). The rough plugins use a microfacet
+//! distribution (Walter et al. 2007) sampled through its visible normals
+//! (Heitz 2018) unless `sample_visible` is false. Textures as parameters,
+//! anisotropic roughness, `mask` and `principled` are refused with a
+//! message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -13,6 +20,16 @@
 //! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
 //! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
 //! | `conductor` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | |
+//! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | reflectance `2R/(1+R)` of the two faces; the rest is transmitted undeviated |
+//! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
+//! | `roughconductor` | `material`, `eta`, `k`, `specular_reflectance` | as `conductor` | | | as `conductor` | |
+//! | rough plugins | `distribution` | string | – | `"beckmann"`, `"ggx"` | `"beckmann"` | microfacet normal distribution |
+//! | rough plugins | `alpha` | float | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
+//! | rough plugins | `sample_visible` | boolean | – | – | true | sample only the normals visible from the incident direction |
+//! | `plastic`, `roughplastic` | `int_ior`, `ext_ior` | float or string | – | as `dielectric`, not equal | `"polypropylene"` (1.49), `"air"` | the coating's indices |
+//! | `plastic`, `roughplastic` | `diffuse_reflectance` | float or rgb | – | in [0, 1] | 0.5 | the base |
+//! | `plastic`, `roughplastic` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | scales the coating's reflection |
+//! | `plastic`, `roughplastic` | `nonlinear` | boolean | – | – | false | account for the colour shift of internal scattering (`ρ/(1 - ρ F_int)` instead of `ρ/(1 - F_int)`) |
 //! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
 //!
 //! ```xml
@@ -22,6 +39,13 @@
 //! <shape type="sphere"><ref id="gold"/></shape>
 //! <shape type="rectangle">
 //!     <bsdf type="diffuse"><rgb name="reflectance" value="$albedo"/></bsdf>
+//! </shape>
+//! <shape type="sphere">
+//!     <bsdf type="roughplastic">
+//!         <string name="distribution" value="ggx"/>
+//!         <float name="alpha" value="0.2"/>
+//!         <rgb name="diffuse_reflectance" value="0.8, 0.3, 0.1"/>
+//!     </bsdf>
 //! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
 //! ```
@@ -33,11 +57,11 @@
 
 use super::context::{check_object_attrs, plugin_type, rgb, Ctx};
 use super::document::XNode;
-use super::props::{check_if, check_rgb, Entry, Props};
+use super::props::{check, check_if, check_rgb, Entry, Props};
 use super::tables;
 use crate::desc::*;
 use crate::error::SceneError;
-use crate::validate::{IOR, NON_NEGATIVE, UNIT};
+use crate::validate::{ALPHA, IOR, NON_NEGATIVE, UNIT};
 
 /// The BSDF of a shape without one, as Mitsuba 3.9's `Shape` constructor
 /// chooses it: a diffuse BSDF of reflectance 0.5, except on a shape with an
@@ -58,7 +82,122 @@ pub(crate) fn default_bsdf(ctx: &mut Ctx, emits: bool) -> BsdfId {
     })
 }
 
-const BSDFS: &[&str] = &["diffuse", "null", "dielectric", "conductor", "twosided"];
+const BSDFS: &[&str] = &[
+    "diffuse",
+    "null",
+    "dielectric",
+    "thindielectric",
+    "roughdielectric",
+    "conductor",
+    "roughconductor",
+    "plastic",
+    "roughplastic",
+    "twosided",
+];
+
+/// `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`, with
+/// Mitsuba's defaults (Beckmann, 0.1, true). `isotropic` refuses
+/// `alpha_u`/`alpha_v` (roughplastic). Anisotropic roughness is refused:
+/// its orientation follows the surface tangent `dp/du`, which the renderer
+/// does not carry.
+fn microfacet_desc(p: &Props, isotropic: bool) -> Result<MicrofacetDesc, SceneError> {
+    let kind = match p
+        .choice("distribution", "beckmann", &["beckmann", "ggx"])?
+        .as_str()
+    {
+        "ggx" => MicrofacetKind::Ggx,
+        _ => MicrofacetKind::Beckmann,
+    };
+    let alpha = p.float("alpha")?;
+    let au = p.float("alpha_u")?;
+    let av = p.float("alpha_v")?;
+    let chk = |v: Option<(f64, &XNode)>, name: &str| -> Result<Option<f64>, SceneError> {
+        v.map(|(v, node)| check(node, name, v, ALPHA)).transpose()
+    };
+    let (a, u, v) = (
+        chk(alpha, "alpha")?,
+        chk(au, "alpha_u")?,
+        chk(av, "alpha_v")?,
+    );
+    let (alpha_u, alpha_v) = match (a, u, v) {
+        (Some(_), Some(_), _) | (Some(_), _, Some(_)) => {
+            return Err(p
+                .node
+                .err("give either 'alpha' or 'alpha_u'/'alpha_v', not both"))
+        }
+        (Some(a), None, None) => (a, a),
+        (None, None, None) => (0.1, 0.1),
+        (None, Some(u), Some(v)) if !isotropic => (u, v),
+        (None, _, _) if isotropic => {
+            return Err(p
+                .node
+                .err("this BSDF takes an isotropic 'alpha' only (no alpha_u/alpha_v)"))
+        }
+        _ => return Err(p.node.err("give both 'alpha_u' and 'alpha_v'")),
+    };
+    if alpha_u != alpha_v {
+        return Err(p.node.err(format!(
+            "anisotropic roughness (alpha_u = {alpha_u} != alpha_v = {alpha_v}) is not supported: it needs surface tangents; give one 'alpha'"
+        )));
+    }
+    Ok(MicrofacetDesc {
+        kind,
+        alpha_u: alpha_u as f32,
+        alpha_v: alpha_v as f32,
+        sample_visible: p.bool_or("sample_visible", true)?,
+    })
+}
+
+/// `int_ior`, `ext_ior` (numbers or Mitsuba's material names), with the
+/// plugin's default interior.
+fn iors(p: &Props, int_default: f64) -> Result<(f32, f32), SceneError> {
+    let int_ior = match p.take("int_ior") {
+        Some(e) => ior(e)?,
+        None => int_default,
+    };
+    let ext_ior = match p.take("ext_ior") {
+        Some(e) => ior(e)?,
+        None => 1.000277,
+    };
+    Ok((int_ior as f32, ext_ior as f32))
+}
+
+/// A conductor's `material` or `eta`/`k` (Mitsuba's defaults: a perfect
+/// mirror), as `(eta, k)`.
+fn conductor_eta_k(p: &Props) -> Result<([f64; 3], [f64; 3]), SceneError> {
+    let material = p.string("material")?;
+    let eta = p.color("eta")?;
+    let k = p.color("k")?;
+    Ok(match material {
+        Some((m, mnode)) if m != "none" => {
+            if eta.is_some() || k.is_some() {
+                return Err(mnode.err("give either 'material' or 'eta'/'k', not both"));
+            }
+            let (_, e, k) = tables::CONDUCTORS
+                .iter()
+                .find(|(name, _, _)| *name == m)
+                .ok_or_else(|| {
+                    mnode.err(format!(
+                        "unknown conductor material '{m}' (valid: none, {})",
+                        tables::CONDUCTORS
+                            .iter()
+                            .map(|(k, _, _)| *k)
+                            .collect::<Vec<_>>()
+                            .join(", ")
+                    ))
+                })?;
+            (*e, *k)
+        }
+        _ => {
+            let nonneg = |v: Option<([f64; 3], &XNode)>, name: &str, def: f64| match v {
+                None => Ok([def; 3]),
+                Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
+            };
+            // Mitsuba's defaults eta = 0, k = 1: a perfect mirror.
+            (nonneg(eta, "eta", 0.0)?, nonneg(k, "k", 1.0)?)
+        }
+    })
+}
 
 /// A BSDF reference or nested BSDF, as an index (shared for the same id).
 pub(crate) fn bsdf_ref<'a>(ctx: &mut Ctx<'a>, e: &Entry<'a>) -> Result<BsdfId, SceneError> {
@@ -126,7 +265,52 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             "specular_reflectance",
             "specular_transmittance",
         ],
+        "thindielectric" => &[
+            "int_ior",
+            "ext_ior",
+            "specular_reflectance",
+            "specular_transmittance",
+        ],
+        "roughdielectric" => &[
+            "int_ior",
+            "ext_ior",
+            "specular_reflectance",
+            "specular_transmittance",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+            "sample_visible",
+        ],
         "conductor" => &["material", "eta", "k", "specular_reflectance"],
+        "roughconductor" => &[
+            "material",
+            "eta",
+            "k",
+            "specular_reflectance",
+            "distribution",
+            "alpha",
+            "alpha_u",
+            "alpha_v",
+            "sample_visible",
+        ],
+        "plastic" => &[
+            "int_ior",
+            "ext_ior",
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "nonlinear",
+        ],
+        "roughplastic" => &[
+            "int_ior",
+            "ext_ior",
+            "diffuse_reflectance",
+            "specular_reflectance",
+            "nonlinear",
+            "distribution",
+            "alpha",
+            "sample_visible",
+        ],
         _ => &[],
     };
     let p = Props::new(n, &ctx.ids, known)?;
@@ -135,64 +319,71 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             reflectance: rgb(p.color_in("reflectance", [0.5; 3], UNIT)?),
         },
         "null" => BsdfDesc::Null,
-        "dielectric" => {
-            let int_ior = match p.take("int_ior") {
-                Some(e) => ior(e)?,
-                None => 1.5046,
-            };
-            let ext_ior = match p.take("ext_ior") {
-                Some(e) => ior(e)?,
-                None => 1.000277,
-            };
-            BsdfDesc::Dielectric {
-                int_ior: int_ior as f32,
-                ext_ior: ext_ior as f32,
-                specular_reflectance: rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?),
-                specular_transmittance: rgb(p.color_in(
-                    "specular_transmittance",
-                    [1.0; 3],
-                    UNIT,
-                )?),
+        "dielectric" | "thindielectric" | "roughdielectric" => {
+            let (int_ior, ext_ior) = iors(&p, 1.5046)?;
+            let specular_reflectance = rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?);
+            let specular_transmittance =
+                rgb(p.color_in("specular_transmittance", [1.0; 3], UNIT)?);
+            match ty {
+                "dielectric" => BsdfDesc::Dielectric {
+                    int_ior,
+                    ext_ior,
+                    specular_reflectance,
+                    specular_transmittance,
+                },
+                "thindielectric" => BsdfDesc::ThinDielectric {
+                    int_ior,
+                    ext_ior,
+                    specular_reflectance,
+                    specular_transmittance,
+                },
+                _ => BsdfDesc::RoughDielectric {
+                    int_ior,
+                    ext_ior,
+                    specular_reflectance,
+                    specular_transmittance,
+                    microfacet: microfacet_desc(&p, false)?,
+                },
             }
         }
-        "conductor" => {
-            let material = p.string("material")?;
-            let eta = p.color("eta")?;
-            let k = p.color("k")?;
-            let (eta, k) = match material {
-                Some((m, mnode)) if m != "none" => {
-                    if eta.is_some() || k.is_some() {
-                        return Err(mnode.err("give either 'material' or 'eta'/'k', not both"));
-                    }
-                    let (_, e, k) = tables::CONDUCTORS
-                        .iter()
-                        .find(|(name, _, _)| *name == m)
-                        .ok_or_else(|| {
-                            mnode.err(format!(
-                                "unknown conductor material '{m}' (valid: none, {})",
-                                tables::CONDUCTORS
-                                    .iter()
-                                    .map(|(k, _, _)| *k)
-                                    .collect::<Vec<_>>()
-                                    .join(", ")
-                            ))
-                        })?;
-                    (*e, *k)
+        "conductor" | "roughconductor" => {
+            let (eta, k) = conductor_eta_k(&p)?;
+            let specular_reflectance = rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?);
+            let perfect_mirror = eta == [0.0; 3] && k == [1.0; 3];
+            if ty == "conductor" {
+                BsdfDesc::Conductor {
+                    eta: rgb(eta),
+                    k: rgb(k),
+                    specular_reflectance,
+                    perfect_mirror,
                 }
-                _ => {
-                    let nonneg = |v: Option<([f64; 3], &XNode)>, name: &str, def: f64| match v {
-                        None => Ok([def; 3]),
-                        Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
-                    };
-                    // Mitsuba's defaults eta = 0, k = 1: a perfect mirror.
-                    (nonneg(eta, "eta", 0.0)?, nonneg(k, "k", 1.0)?)
+            } else {
+                BsdfDesc::RoughConductor {
+                    eta: rgb(eta),
+                    k: rgb(k),
+                    specular_reflectance,
+                    perfect_mirror,
+                    microfacet: microfacet_desc(&p, false)?,
                 }
-            };
-            BsdfDesc::Conductor {
-                eta: rgb(eta),
-                k: rgb(k),
+            }
+        }
+        "plastic" | "roughplastic" => {
+            // Mitsuba's default interior: polypropylene.
+            let (int_ior, ext_ior) = iors(&p, 1.49)?;
+            if int_ior == ext_ior {
+                return Err(n.err("int_ior and ext_ior must differ"));
+            }
+            BsdfDesc::Plastic {
+                int_ior,
+                ext_ior,
+                diffuse_reflectance: rgb(p.color_in("diffuse_reflectance", [0.5; 3], UNIT)?),
                 specular_reflectance: rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?),
-                perfect_mirror: eta == [0.0; 3] && k == [1.0; 3],
+                nonlinear: p.bool_or("nonlinear", false)?,
+                microfacet: if ty == "roughplastic" {
+                    Some(microfacet_desc(&p, true)?)
+                } else {
+                    None
+                },
             }
         }
         _ => {

@@ -1,6 +1,7 @@
 //! `<emitter>`: `area` (nested in the `<shape>` that emits; it emits toward
 //! the side its normal points to), and at the top level `point`, `spot`,
-//! `directional` and `constant` (a uniform environment; at most one). Every
+//! `directional`, `constant` (a uniform environment) and `envmap` (an image
+//! of the environment; at most one environment emitter). Every
 //! colour is `≥ 0` in each channel; radiometric units are described in
 //! [`super`].
 //!
@@ -15,6 +16,9 @@
 //! | `spot` | `beam_width` | float | degrees | 0 ≤ beam_width ≤ cutoff_angle | 0.75 · cutoff_angle | full intensity within it, then falling linearly in the angle to 0 at `cutoff_angle` |
 //! | `directional` | `irradiance` | float or rgb | power/length² | ≥ 0 | 1 | on a surface facing the light |
 //! | `directional` | `direction` or `to_world` | vector or transform | – | a nonzero vector | +z (the local +z of `to_world`) | the direction the light travels in; not both |
+//! | `envmap` | `filename` | string | – | an OpenEXR (`.exr`) or Radiance RGBE (`.hdr`) latitude–longitude image of at least 2x3 pixels, relative to the scene file | required | linear RGB radiance; the top row is local +y, `u = atan2(x, -z)/2π` |
+//! | `envmap` | `scale` | float | – | ≥ 0 | 1 | multiplies the image |
+//! | `envmap` | `to_world` | transform | – | invertible | identity | orients the map (usually a rotation) |
 //!
 //! ```xml
 //! <emitter type="spot">
@@ -27,6 +31,11 @@
 //! <shape type="rectangle">
 //!     <emitter type="area"><rgb name="radiance" value="10"/></emitter>
 //! </shape>
+//! <emitter type="envmap">
+//!     <string name="filename" value="sky.exr"/>
+//!     <float name="scale" value="0.5"/>
+//!     <transform name="to_world"><rotate y="1" angle="90"/></transform>
+//! </emitter>
 //! <default name="power" value="50"/>
 //! ```
 //!
@@ -40,7 +49,7 @@ use super::document::XNode;
 use super::props::{check_if, Props};
 use crate::desc::*;
 use crate::error::SceneError;
-use crate::validate::{BEAM_WIDTH, CUTOFF_ANGLE, NON_NEGATIVE};
+use crate::validate::{BEAM_WIDTH, CUTOFF_ANGLE, NON_NEGATIVE, SCALE};
 use glam::{DVec3, Mat4, Vec3};
 
 pub(crate) fn emitter_desc(
@@ -61,7 +70,7 @@ pub(crate) fn emitter_desc(
         let ty = plugin_type(
             n,
             "emitter",
-            &["area", "point", "spot", "directional", "constant"],
+            &["area", "point", "spot", "directional", "constant", "envmap"],
         )?;
         if ty == "area" {
             return Err(n.err("an 'area' emitter must be nested inside the <shape> that emits"));
@@ -72,6 +81,7 @@ pub(crate) fn emitter_desc(
         "area" | "constant" => &["radiance"],
         "point" => &["intensity", "position", "to_world"],
         "spot" => &["intensity", "to_world", "cutoff_angle", "beam_width"],
+        "envmap" => &["filename", "scale", "to_world"],
         _ => &["irradiance", "direction", "to_world"],
     };
     let p = Props::new(n, &ctx.ids, known)?;
@@ -82,6 +92,51 @@ pub(crate) fn emitter_desc(
         "constant" => EmitterDesc::Constant {
             radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),
         },
+        "envmap" => {
+            let (file, fnode) = p.string("filename")?.ok_or_else(|| {
+                n.err("missing required parameter 'filename' (a lat-long .exr or .hdr image, relative to the scene file)")
+            })?;
+            let path = fnode.resolve(file);
+            let ext = path
+                .extension()
+                .and_then(|e| e.to_str())
+                .map(|e| e.to_ascii_lowercase());
+            let read = match ext.as_deref() {
+                Some("exr") => fgf_io::image::read_exr_rgb(&path),
+                Some("hdr") | Some("rgbe") | Some("pic") => fgf_io::image::read_hdr_rgb(&path),
+                _ => {
+                    return Err(fnode.err(format!(
+                        "envmap image '{file}': only OpenEXR (.exr) and Radiance RGBE (.hdr) images are supported"
+                    )))
+                }
+            };
+            let (width, height, mut data) =
+                read.map_err(|e| fnode.err(format!("cannot read envmap image: {e}")))?;
+            if width < 2 || height < 3 {
+                return Err(fnode.err(format!(
+                    "envmap image '{file}' is {width}x{height}; it must be at least 2x3 pixels"
+                )));
+            }
+            if let Some(bad) = data.iter().find(|v| !(v.is_finite() && **v >= 0.0)) {
+                return Err(fnode.err(format!(
+                    "envmap image '{file}' has a pixel value {bad} (valid: finite and >= 0)"
+                )));
+            }
+            let scale = p.float_in("scale", 1.0, SCALE)? as f32;
+            data.iter_mut().for_each(|v| *v *= scale);
+            let to_world = match p.transform("to_world")? {
+                Some((m, node)) => to_invertible_mat4(node, m)?,
+                None => Mat4::IDENTITY,
+            };
+            EmitterDesc::Envmap {
+                image: std::sync::Arc::new(RgbImage {
+                    width,
+                    height,
+                    data,
+                }),
+                to_world,
+            }
+        }
         "point" => {
             let intensity = rgb(p.color_in("intensity", [1.0; 3], NON_NEGATIVE)?);
             let position = match (p.vec3("position")?, p.transform("to_world")?) {

@@ -13,15 +13,35 @@
 //! * `dielectric`: smooth, both sides; transmitted radiance is scaled by `(η_i/η_t)²` (Mitsuba's non-symmetric transport in radiance mode)
 //! * `conductor`: smooth, complex Fresnel per channel; one-sided
 //! * `twosided`: the nested BSDF on both sides
+//! * `thindielectric`: a thin slab: `R' = 2R/(1+R)` (all inter-reflections
+//!   of the two faces), the rest passes straight through; delta, both sides
+//! * `roughconductor`, `roughdielectric` ([`rough`]), `plastic`,
+//!   `roughplastic` ([`plastic`]): microfacet models on the distributions of
+//!   [`microfacet`]; their non-delta lobes take part in light sampling and MIS
+//!
+//! One file per family: [`fresnel`], [`microfacet`], [`rough`], [`plastic`];
+//! the dispatch is one `match` on the closed [`BsdfKind`] here.
+
+pub mod fresnel;
+pub mod microfacet;
+pub mod plastic;
+pub mod rough;
+#[cfg(test)]
+mod tests;
+
+pub use fresnel::{fresnel_conductor, fresnel_dielectric, FresnelDielectric};
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::Spectrum;
-use fgf_scene::BsdfDesc;
+use fgf_scene::{BsdfDesc, MicrofacetDesc, MicrofacetKind};
 use glam::Vec3;
+use microfacet::{Distribution, Microfacet};
+use plastic::{Plastic, RoughPlastic};
+use rough::{RoughConductor, RoughDielectric};
 use std::f32::consts::FRAC_1_PI;
 
 /// The closed set of BSDF models.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub enum BsdfKind {
     Diffuse {
         reflectance: Spectrum,
@@ -39,10 +59,33 @@ pub enum BsdfKind {
         r: Spectrum,
         mirror: bool,
     },
+    /// `eta = int_ior / ext_ior`.
+    ThinDielectric {
+        eta: f32,
+        r: Spectrum,
+        t: Spectrum,
+    },
+    RoughConductor(RoughConductor),
+    RoughDielectric(RoughDielectric),
+    Plastic(Plastic),
+    RoughPlastic(RoughPlastic),
+}
+
+/// The renderer's microfacet distribution of a description.
+fn microfacet(m: &MicrofacetDesc) -> Microfacet {
+    Microfacet {
+        kind: match m.kind {
+            MicrofacetKind::Beckmann => Distribution::Beckmann,
+            MicrofacetKind::Ggx => Distribution::Ggx,
+        },
+        ax: m.alpha_u,
+        ay: m.alpha_v,
+        visible: m.sample_visible,
+    }
 }
 
 /// A BSDF and whether it is mirrored to the back side (`twosided`).
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Bsdf {
     pub kind: BsdfKind,
     pub twosided: bool,
@@ -103,6 +146,74 @@ impl Bsdf {
                 },
                 twosided: false,
             },
+            BsdfDesc::ThinDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+            } => Bsdf {
+                kind: BsdfKind::ThinDielectric {
+                    eta: int_ior / ext_ior,
+                    r: c(*specular_reflectance),
+                    t: c(*specular_transmittance),
+                },
+                twosided: false,
+            },
+            BsdfDesc::RoughConductor {
+                eta,
+                k,
+                specular_reflectance,
+                perfect_mirror,
+                microfacet: m,
+            } => Bsdf {
+                kind: BsdfKind::RoughConductor(RoughConductor {
+                    eta: c(*eta),
+                    k: c(*k),
+                    r: c(*specular_reflectance),
+                    mirror: *perfect_mirror,
+                    distr: microfacet(m),
+                }),
+                twosided: false,
+            },
+            BsdfDesc::RoughDielectric {
+                int_ior,
+                ext_ior,
+                specular_reflectance,
+                specular_transmittance,
+                microfacet: m,
+            } => Bsdf {
+                kind: BsdfKind::RoughDielectric(RoughDielectric {
+                    eta: int_ior / ext_ior,
+                    r: c(*specular_reflectance),
+                    t: c(*specular_transmittance),
+                    distr: microfacet(m),
+                }),
+                twosided: false,
+            },
+            BsdfDesc::Plastic {
+                int_ior,
+                ext_ior,
+                diffuse_reflectance,
+                specular_reflectance,
+                nonlinear,
+                microfacet: m,
+            } => {
+                let eta = int_ior / ext_ior;
+                let (d, sp) = (c(*diffuse_reflectance), c(*specular_reflectance));
+                Bsdf {
+                    kind: match m {
+                        None => BsdfKind::Plastic(Plastic::new(eta, d, sp, *nonlinear)),
+                        Some(m) => BsdfKind::RoughPlastic(RoughPlastic::new(
+                            eta,
+                            d,
+                            sp,
+                            *nonlinear,
+                            microfacet(m),
+                        )),
+                    },
+                    twosided: false,
+                }
+            }
             BsdfDesc::TwoSided(inner) => Bsdf {
                 twosided: true,
                 ..Bsdf::from_desc(inner)
@@ -118,25 +229,45 @@ impl Bsdf {
     /// True if the BSDF has a non-delta lobe, so light sampling helps.
     #[inline]
     pub fn is_smooth(&self) -> bool {
-        matches!(self.kind, BsdfKind::Diffuse { .. })
+        matches!(
+            self.kind,
+            BsdfKind::Diffuse { .. }
+                | BsdfKind::RoughConductor(_)
+                | BsdfKind::RoughDielectric(_)
+                | BsdfKind::Plastic(_)
+                | BsdfKind::RoughPlastic(_)
+        )
     }
 
     /// `f(wi, wo)·|wo.z|` and the pdf of sampling `wo` (zero for delta lobes).
+    ///
+    /// The diffuse case stays inline (the hot path of the reference scenes);
+    /// the other models are evaluated out of line.
+    #[inline]
     pub fn eval_pdf(&self, mut wi: Vec3, mut wo: Vec3) -> (Spectrum, f32) {
         if self.twosided && wi.z < 0.0 {
             wi.z = -wi.z;
             wo.z = -wo.z;
         }
-        match self.kind {
-            BsdfKind::Diffuse { reflectance } => {
-                if wi.z <= 0.0 || wo.z <= 0.0 {
-                    return (Spectrum::ZERO, 0.0);
-                }
-                (
-                    reflectance * (FRAC_1_PI * wo.z),
-                    cosine_hemisphere_pdf(wo.z),
-                )
+        if let BsdfKind::Diffuse { reflectance } = &self.kind {
+            if wi.z <= 0.0 || wo.z <= 0.0 {
+                return (Spectrum::ZERO, 0.0);
             }
+            return (
+                *reflectance * (FRAC_1_PI * wo.z),
+                cosine_hemisphere_pdf(wo.z),
+            );
+        }
+        self.eval_pdf_glossy(wi, wo)
+    }
+
+    #[inline(never)]
+    fn eval_pdf_glossy(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+        match &self.kind {
+            BsdfKind::RoughConductor(b) => b.eval_pdf(wi, wo),
+            BsdfKind::RoughDielectric(b) => b.eval_pdf(wi, wo),
+            BsdfKind::Plastic(b) => b.eval_pdf(wi, wo),
+            BsdfKind::RoughPlastic(b) => b.eval_pdf(wi, wo),
             _ => (Spectrum::ZERO, 0.0),
         }
     }
@@ -147,7 +278,7 @@ impl Bsdf {
         if flipped {
             wi.z = -wi.z;
         }
-        let mut s = match self.kind {
+        let mut s = match &self.kind {
             BsdfKind::Diffuse { reflectance } => {
                 if wi.z <= 0.0 {
                     return None;
@@ -158,7 +289,7 @@ impl Bsdf {
                 }
                 BsdfSample {
                     wo,
-                    weight: reflectance,
+                    weight: *reflectance,
                     pdf: cosine_hemisphere_pdf(wo.z),
                     delta: false,
                     eta: 1.0,
@@ -171,7 +302,7 @@ impl Bsdf {
                 delta: true,
                 eta: 1.0,
             },
-            BsdfKind::Dielectric { eta, r, t } => {
+            &BsdfKind::Dielectric { eta, r, t } => {
                 let f = fresnel_dielectric(wi.z, eta);
                 if u1 < f.r {
                     BsdfSample {
@@ -195,7 +326,33 @@ impl Bsdf {
                     }
                 }
             }
-            BsdfKind::Conductor { eta, k, r, mirror } => {
+            &BsdfKind::ThinDielectric { eta, r, t } => {
+                let f = fresnel_dielectric(wi.z.abs(), eta).r;
+                // All inter-reflections between the two faces of the slab.
+                let rr = if f < 1.0 { 2.0 * f / (1.0 + f) } else { 1.0 };
+                if u1 < rr {
+                    BsdfSample {
+                        wo: Vec3::new(-wi.x, -wi.y, wi.z),
+                        weight: r,
+                        pdf: rr,
+                        delta: true,
+                        eta: 1.0,
+                    }
+                } else {
+                    BsdfSample {
+                        wo: -wi,
+                        weight: t,
+                        pdf: 1.0 - rr,
+                        delta: true,
+                        eta: 1.0,
+                    }
+                }
+            }
+            BsdfKind::RoughConductor(b) => b.sample(wi, u2)?,
+            BsdfKind::RoughDielectric(b) => b.sample(wi, u1, u2)?,
+            BsdfKind::Plastic(b) => b.sample(wi, u1, u2)?,
+            BsdfKind::RoughPlastic(b) => b.sample(wi, u1, u2)?,
+            &BsdfKind::Conductor { eta, k, r, mirror } => {
                 if wi.z <= 0.0 {
                     return None;
                 }
@@ -221,124 +378,5 @@ impl Bsdf {
             s.wo.z = -s.wo.z;
         }
         Some(s)
-    }
-}
-
-/// Fresnel reflectance of a smooth dielectric interface.
-#[derive(Debug, Clone, Copy)]
-pub struct FresnelDielectric {
-    /// Unpolarised reflectance.
-    pub r: f32,
-    /// Signed cosine of the transmitted direction (opposite side to `wi`); 0 at total internal reflection.
-    pub cos_t: f32,
-    /// `η_t/η_i` for this side.
-    pub eta_it: f32,
-    /// `η_i/η_t`.
-    pub eta_ti: f32,
-}
-
-/// Fresnel equations for `cos_i = wi.z` and `eta = η_inside/η_outside`
-/// (the inside is the `-z` side).
-pub fn fresnel_dielectric(cos_i: f32, eta: f32) -> FresnelDielectric {
-    let eta_it = if cos_i >= 0.0 { eta } else { 1.0 / eta };
-    let eta_ti = 1.0 / eta_it;
-    let ci = cos_i.abs();
-    let cos_t_sq = 1.0 - eta_ti * eta_ti * (1.0 - ci * ci);
-    if cos_t_sq <= 0.0 {
-        return FresnelDielectric {
-            r: 1.0,
-            cos_t: 0.0,
-            eta_it,
-            eta_ti,
-        };
-    }
-    let ct = cos_t_sq.sqrt();
-    let rs = (ci - eta_it * ct) / (ci + eta_it * ct);
-    let rp = (eta_it * ci - ct) / (eta_it * ci + ct);
-    let r = 0.5 * (rs * rs + rp * rp);
-    FresnelDielectric {
-        r,
-        cos_t: if cos_i >= 0.0 { -ct } else { ct },
-        eta_it,
-        eta_ti,
-    }
-}
-
-/// Unpolarised Fresnel reflectance of a conductor with complex index
-/// `eta + i k` relative to the outside, at incidence cosine `cos_i > 0`.
-pub fn fresnel_conductor(cos_i: f32, eta: f32, k: f32) -> f32 {
-    // Complex arithmetic in f64: the magnitudes |eta + ik|² can reach 1e2 and
-    // the differences below cancel.
-    let (ci, eta, k) = (cos_i as f64, eta as f64, k as f64);
-    let sin2 = 1.0 - ci * ci;
-    // η² = (eta + ik)², then cos_t = sqrt(1 - sin²θ/η²) (principal root).
-    let e2 = (eta * eta - k * k, 2.0 * eta * k);
-    let inv = {
-        let d = e2.0 * e2.0 + e2.1 * e2.1;
-        (e2.0 / d, -e2.1 / d)
-    };
-    let z = (1.0 - sin2 * inv.0, -sin2 * inv.1);
-    let ct = csqrt(z);
-    let e = (eta, k);
-    let mul = |a: (f64, f64), b: (f64, f64)| (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0);
-    let abs2 = |a: (f64, f64)| a.0 * a.0 + a.1 * a.1;
-    // r_s = (cos_i - η cos_t)/(cos_i + η cos_t), r_p = (η cos_i - cos_t)/(η cos_i + cos_t).
-    let ect = mul(e, ct);
-    let rs = abs2((ci - ect.0, -ect.1)) / abs2((ci + ect.0, ect.1));
-    let eci = (eta * ci, k * ci);
-    let rp = abs2((eci.0 - ct.0, eci.1 - ct.1)) / abs2((eci.0 + ct.0, eci.1 + ct.1));
-    (0.5 * (rs + rp)) as f32
-}
-
-fn csqrt(z: (f64, f64)) -> (f64, f64) {
-    let r = (z.0 * z.0 + z.1 * z.1).sqrt();
-    let re = (0.5 * (r + z.0)).max(0.0).sqrt();
-    let im = (0.5 * (r - z.0)).max(0.0).sqrt().copysign(z.1);
-    (re, im)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn dielectric_fresnel_normal_incidence() {
-        // ((η-1)/(η+1))² = 0.04 for η = 1.5, from both sides.
-        assert!((fresnel_dielectric(1.0, 1.5).r - 0.04).abs() < 1e-6);
-        assert!((fresnel_dielectric(-1.0, 1.5).r - 0.04).abs() < 1e-6);
-        // Total internal reflection beyond the critical angle (inside, η = 1.5).
-        assert_eq!(fresnel_dielectric(-0.3, 1.5).r, 1.0);
-    }
-
-    #[test]
-    fn conductor_reduces_to_dielectric_for_k0() {
-        for &c in &[0.1f32, 0.5, 0.9, 1.0] {
-            let a = fresnel_conductor(c, 1.5, 0.0);
-            let b = fresnel_dielectric(c, 1.5).r;
-            assert!((a - b).abs() < 1e-5, "{a} vs {b}");
-        }
-        // Normal incidence: |(η - 1)/(η + 1)|² with η = eta + ik.
-        let (eta, k) = (0.2f32, 3.0f32);
-        let exp = ((eta - 1.0).powi(2) + k * k) / ((eta + 1.0).powi(2) + k * k);
-        assert!((fresnel_conductor(1.0, eta, k) - exp).abs() < 1e-5);
-    }
-
-    #[test]
-    fn refraction_obeys_snell() {
-        let b = Bsdf {
-            kind: BsdfKind::Dielectric {
-                eta: 1.5,
-                r: Spectrum::ONE,
-                t: Spectrum::ONE,
-            },
-            twosided: false,
-        };
-        let wi = Vec3::new(0.6, 0.0, 0.8);
-        let s = b.sample(wi, 0.999, [0.0, 0.0]).unwrap();
-        let sin_i = 0.6f32;
-        let sin_t = (s.wo.x * s.wo.x + s.wo.y * s.wo.y).sqrt();
-        assert!((sin_i - 1.5 * sin_t).abs() < 1e-5);
-        assert!(s.wo.z < 0.0 && (s.wo.length() - 1.0).abs() < 1e-5);
-        assert!((s.weight.x - 1.0 / 2.25).abs() < 1e-6);
     }
 }

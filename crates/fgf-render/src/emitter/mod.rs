@@ -8,14 +8,19 @@
 //! * `area` (inside a shape): one-sided: emits toward the shape's normal side
 //! * `spot`: full intensity inside `beam_width`, then falling linearly in the angle to 0 at `cutoff_angle` (measured against Mitsuba 3.9.1)
 //! * `constant`: uniform environment
+//! * `envmap`: an image of the environment, sampled by luminance ([`envmap`])
+
+pub mod envmap;
 
 use crate::geometry::Geometry;
 use crate::math::{sample_uniform_sphere, UNIFORM_SPHERE_PDF};
 use crate::spectrum::{from_rgb, Spectrum};
+use envmap::Envmap;
 use fgf_scene::EmitterDesc;
 use glam::{Mat3, Vec3};
+use std::sync::Arc;
 
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub enum Emitter {
     Area {
         shape: u32,
@@ -39,6 +44,7 @@ pub enum Emitter {
     Constant {
         radiance: Spectrum,
     },
+    Envmap(Arc<Envmap>),
 }
 
 /// A light sample seen from a reference point.
@@ -99,7 +105,28 @@ impl Emitter {
             EmitterDesc::Constant { radiance } => Emitter::Constant {
                 radiance: from_rgb(*radiance),
             },
+            EmitterDesc::Envmap { image, to_world } => {
+                Emitter::Envmap(Arc::new(Envmap::new(image, *to_world)))
+            }
         }
+    }
+
+    /// For an environment emitter: the radiance arriving along a ray that
+    /// escapes in direction `d`, and the solid-angle pdf with which
+    /// [`Self::sample`] picks `d` (for MIS).
+    #[inline]
+    pub fn environment(&self, d: Vec3) -> Option<(Spectrum, f32)> {
+        match self {
+            Emitter::Constant { radiance } => Some((*radiance, UNIFORM_SPHERE_PDF)),
+            Emitter::Envmap(e) => Some((e.eval(d), e.pdf(d))),
+            _ => None,
+        }
+    }
+
+    /// Whether this is an environment emitter (`constant`, `envmap`).
+    #[inline]
+    pub fn is_environment(&self) -> bool {
+        matches!(self, Emitter::Constant { .. } | Emitter::Envmap(_))
     }
 
     /// Sample a direction toward the light from `p`.
@@ -177,6 +204,16 @@ impl Emitter {
                 pdf: UNIFORM_SPHERE_PDF,
                 delta: false,
             }),
+            Emitter::Envmap(ref e) => {
+                let (wi, value, pdf) = e.sample(u)?;
+                Some(LightSample {
+                    wi,
+                    dist: f32::INFINITY,
+                    value,
+                    pdf,
+                    delta: false,
+                })
+            }
         }
     }
 }
