@@ -34,22 +34,6 @@ fn rough_defaults_are_mitsubas() {
         }
         d => panic!("{d:?}"),
     }
-    match bsdf(
-        r#"<bsdf type="roughplastic"><string name="distribution" value="ggx"/><float name="alpha" value="0.3"/></bsdf>"#,
-    ) {
-        BsdfDesc::Plastic {
-            int_ior,
-            diffuse_reflectance,
-            microfacet: Some(m),
-            nonlinear: false,
-            ..
-        } => {
-            assert_eq!(int_ior, 1.49);
-            assert_eq!(diffuse_reflectance, [0.5; 3]);
-            assert_eq!((m.kind, m.alpha_u), (MicrofacetKind::Ggx, 0.3));
-        }
-        d => panic!("{d:?}"),
-    }
     assert!(matches!(
         bsdf(r#"<bsdf type="plastic"/>"#),
         BsdfDesc::Plastic {
@@ -76,11 +60,15 @@ fn refusals_name_the_parameter() {
     assert!(e.contains("anisotropic roughness"), "{e}");
     let e = load(r#"<shape type="sphere"><bsdf type="roughdielectric"><float name="alpha" value="0"/></bsdf></shape>"#).unwrap_err();
     assert!(e.contains("invalid alpha = 0"), "{e}");
-    let e = load(r#"<shape type="sphere"><bsdf type="roughplastic"><string name="distribution" value="phong"/></bsdf></shape>"#).unwrap_err();
+    let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#).unwrap_err();
     assert!(
         e.contains("invalid distribution = 'phong' (valid: beckmann, ggx)"),
         "{e}"
     );
+    // Refused until its diffuse lobe matches Mitsuba 3 at grazing angles.
+    let e = load(r#"<shape type="sphere"><bsdf type="roughplastic"/></shape>"#).unwrap_err();
+    assert!(e.contains("roughplastic is not supported yet"), "{e}");
+    assert_eq!(e.lines().count(), 1, "{e}");
     let e = load(r#"<emitter type="envmap"><string name="filename" value="sky.png"/></emitter>"#)
         .unwrap_err();
     assert!(
