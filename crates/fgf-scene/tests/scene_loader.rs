@@ -1060,7 +1060,7 @@ fn unknown_plugin_lists_the_supported_ones() {
     );
     has(
         &err(r#"<integrator type="bdpt"/>"#),
-        &["unknown integrator type 'bdpt'", "volpath, path"],
+        &["unknown integrator type 'bdpt'", "volpath, volpathmis, path, direct, moment"],
     );
     has(
         &err(r#"<emitter type="envmap"/>"#),
@@ -1082,8 +1082,8 @@ fn unknown_plugin_lists_the_supported_ones() {
         &["unsupported element <texture>"],
     );
     has(
-        &err(r#"<sensor type="perspective"><sampler type="stratified"/></sensor>"#),
-        &["unknown sampler type 'stratified'", "independent"],
+        &err(r#"<sensor type="perspective"><sampler type="sobol"/></sensor>"#),
+        &["unknown sampler type 'sobol'", "independent"],
     );
     has(
         &err(

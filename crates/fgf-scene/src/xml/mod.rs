@@ -145,6 +145,7 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
     let mut shape_nodes = Vec::new();
     let mut emitters = Vec::new();
     let mut emitter_nodes = Vec::new();
+    let mut area_decls = Vec::new();
     for n in nodes {
         match n.tag.as_str() {
             "integrator" => {
@@ -172,6 +173,11 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
             "bsdf" => {
                 bsdfs::bsdf_id(&mut ctx, n)?;
             }
+            // A top-level area emitter with an id is instantiated by the
+            // shape that references it (checked below).
+            "emitter" if n.attr("type") == Some("area") && n.attr("id").is_some() => {
+                area_decls.push(n);
+            }
             "emitter" => {
                 emitters.push(emitters::emitter_desc(&ctx, n, false)?);
                 emitter_nodes.push(n);
@@ -185,6 +191,12 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
                     TOP_LEVEL.join(", ")
                 )))
             }
+        }
+    }
+    for n in area_decls {
+        if !ctx.area_refs.contains_key(n.attr("id").unwrap_or("")) {
+            // Unreferenced: the emitter's own message (it needs a shape).
+            emitters::emitter_desc(&ctx, n, false)?;
         }
     }
     nonexp::resolve_default_lengths(&mut ctx, &shapes)?;

@@ -13,7 +13,7 @@
 //! | `obj`, `ply` | `filename` | string | – | a file, relative to the scene file | required | OBJ (any groups, merged) or PLY (ascii or binary; n-gons fan-triangulated) |
 //! | `obj`, `ply` | `face_normals` | boolean | – | – | false | flat shading: the file's normals are ignored and none are computed (see below) |
 //! | all | nested `bsdf` | – | – | one, or a `<ref>` | diffuse 0.5; diffuse 0 on a shape with an area emitter | see below |
-//! | all | nested `emitter` | – | – | one `area` emitter | none | see [`super::emitters`] |
+//! | all | nested `emitter` | – | – | one `area` emitter, nested or a `<ref>` to one declared at the top level with an `id` (used by one shape only) | none | see [`super::emitters`] |
 //! | all | nested `medium` | – | – | `name="interior"` and/or `name="exterior"` | none | see [`super::media`] |
 //!
 //! ```xml
@@ -160,9 +160,16 @@ pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDes
     let emitter = match emitters.first() {
         Some(e) => {
             if e.node.tag == "ref" {
-                return Err(e
-                    .node
-                    .err("an area emitter must be nested in its shape, not referenced"));
+                // An area emitter declared at the top level with an id.
+                if let Some(id) = e.target.attr("id") {
+                    if let Some(prev) = ctx.area_refs.insert(id.to_string(), n) {
+                        return Err(e.node.err(format!(
+                            "area emitter '{id}' is already attached to the shape at {}:{} (an emitter belongs to one shape)",
+                            prev.file.display(),
+                            prev.line
+                        )));
+                    }
+                }
             }
             Some(emitters::emitter_desc(ctx, e.target, true)?)
         }
