@@ -357,7 +357,11 @@ impl SceneDesc {
         range("max_depth", d.max_depth as i64, MAX_DEPTH)?;
         range("rr_depth", d.rr_depth as i64, RR_DEPTH)?;
         if d.kind != IntegratorKind::Volpath && !self.media.is_empty() {
-            let ty = if d.kind == IntegratorKind::Path { "path" } else { "direct" };
+            let ty = if d.kind == IntegratorKind::Path {
+                "path"
+            } else {
+                "direct"
+            };
             return fail(
                 None,
                 format!(

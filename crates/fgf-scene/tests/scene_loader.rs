@@ -1060,7 +1060,10 @@ fn unknown_plugin_lists_the_supported_ones() {
     );
     has(
         &err(r#"<integrator type="bdpt"/>"#),
-        &["unknown integrator type 'bdpt'", "volpath, volpathmis, path, direct, moment"],
+        &[
+            "unknown integrator type 'bdpt'",
+            "volpath, volpathmis, path, direct, moment",
+        ],
     );
     has(
         &err(r#"<emitter type="envmap"/>"#),

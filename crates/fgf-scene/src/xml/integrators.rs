@@ -55,10 +55,14 @@ pub(crate) fn integrator_desc(ctx: &Ctx, n: &XNode) -> Result<IntegratorDesc, Sc
         let inner = p.take_objects("integrator");
         p.finish()?;
         let first = inner.first().ok_or_else(|| {
-            n.err("'moment' needs a nested <integrator> (its image is the first nested integrator's)")
+            n.err(
+                "'moment' needs a nested <integrator> (its image is the first nested integrator's)",
+            )
         })?;
         if first.target.attr("type") == Some("moment") {
-            return Err(first.node.err("a 'moment' integrator nested in a 'moment' integrator is not supported"));
+            return Err(first
+                .node
+                .err("a 'moment' integrator nested in a 'moment' integrator is not supported"));
         }
         for e in &inner[1..] {
             // Checked, though only the first one renders.

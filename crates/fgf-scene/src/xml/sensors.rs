@@ -197,8 +197,10 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
     s.near_clip = near as f32;
     s.far_clip = far as f32;
     s.principal_point = [
-        p.float("principal_point_offset_x")?.map_or(0.0, |(v, _)| v as f32),
-        p.float("principal_point_offset_y")?.map_or(0.0, |(v, _)| v as f32),
+        p.float("principal_point_offset_x")?
+            .map_or(0.0, |(v, _)| v as f32),
+        p.float("principal_point_offset_y")?
+            .map_or(0.0, |(v, _)| v as f32),
     ];
     // A pinhole camera has no focus: accepted (and range-checked) only.
     p.float_in("focus_distance", far, FOCUS_DISTANCE)?;

@@ -273,7 +273,11 @@ pub(crate) fn gridvolume(
         let inside_only = matches!(name, "sigma_t" | "density");
         let ok = w == "clamp" || (w == "mirror" && inside_only);
         if !ok {
-            let valid = if inside_only { "clamp, mirror" } else { "clamp" };
+            let valid = if inside_only {
+                "clamp, mirror"
+            } else {
+                "clamp"
+            };
             return Err(node.err(format!(
                 "wrap_mode '{w}' is not supported for '{name}' (valid: {valid})"
             )));
