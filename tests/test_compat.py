@@ -206,9 +206,27 @@ def test_grid_albedo_in_homogeneous_medium_and_referenced_area_emitter(tmp_path:
     compare(write(tmp_path, "albedo.xml", body), {}, 16)
 
 
-def test_wavelength_value_spectrum_is_refused_in_one_line(tmp_path: Path) -> None:
-    body = '<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 700:0.9"/></bsdf></shape>'
+def test_wavelength_value_spectra_convert_as_mitsuba_rgb_variants(tmp_path: Path) -> None:
+    # A reflectance (D65-weighted, clamped to [0, 1]), an emitter's radiance
+    # (unweighted) and a conductor's eta/k (D65-weighted, unclamped above).
+    body = (
+        '<integrator type="path"><integer name="max_depth" value="3"/></integrator>'
+        + sensor()
+        + """
+<emitter type="constant"><spectrum name="radiance" value="380:0.5, 450:0.9, 560:1.4, 700:0.6, 780:0.3"/></emitter>
+<shape type="sphere">
+  <bsdf type="diffuse"><spectrum name="reflectance" value="400:0.05, 500:0.8, 600:0.3, 700:0.95"/></bsdf>
+</shape>
+<shape type="cube"><transform name="to_world"><scale value="0.4"/><translate value="1.3, 0.2, 0"/></transform>
+  <bsdf type="conductor"><spectrum name="eta" value="400:1.6, 550:0.9, 700:0.2"/><spectrum name="k" value="400:2.0, 550:2.6, 700:3.9"/></bsdf>
+</shape>"""
+    )
+    compare(write(tmp_path, "spec.xml", body), {}, 16)
+
+
+def test_malformed_spectrum_is_refused_in_one_line(tmp_path: Path) -> None:
+    body = '<shape type="sphere"><bsdf type="diffuse"><spectrum name="reflectance" value="700:0.1, 400:0.9"/></bsdf></shape>'
     with pytest.raises(fgf.SceneError) as e:
         fgf.render(write(tmp_path, "spec.xml", body), spp=1, progress=False)
     msg = str(e.value)
-    assert "wavelength:value" in msg and "\n" not in msg
+    assert "wavelengths must increase" in msg and "\n" not in msg

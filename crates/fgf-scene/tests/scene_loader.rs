@@ -1242,8 +1242,8 @@ fn wrong_types_and_bad_numbers_name_parameter_and_range() {
             &["invalid reflectance", "in [0, 1]"],
         ),
         (
-            r#"<bsdf type="diffuse"><spectrum name="reflectance" value="400:0.1, 700:0.5"/></bsdf>"#,
-            &["wavelength:value pairs is not supported"],
+            r#"<bsdf type="diffuse"><spectrum name="reflectance" value="700:0.1, 400:0.5"/></bsdf>"#,
+            &["spectrum 'reflectance': wavelengths must increase"],
         ),
         (
             r#"<bsdf type="diffuse"><boolean name="reflectance" value="yes"/></bsdf>"#,

@@ -7,6 +7,7 @@
 
 use super::document::XNode;
 use super::parse::{parse_f64, parse_list, xyz_or_value};
+use super::spectrum::{parse_pairs, to_srgb, SpectrumUse};
 use super::transform;
 use crate::error::SceneError;
 use crate::validate::{out_of_range, out_of_range_rgb, Range};
@@ -156,9 +157,19 @@ impl<'a> Entry<'a> {
             "spectrum" => {
                 let s = self.value_attr()?;
                 if s.contains(':') {
-                    return Err(self.node.err(format!(
-                        "spectrum '{name}' with wavelength:value pairs is not supported (this renderer is RGB); use <rgb name=\"{name}\" value=\"r, g, b\"/> or a single uniform value"
-                    )));
+                    let (w, v) = parse_pairs(s).map_err(|m| {
+                        self.node.err(format!(
+                            "spectrum '{name}': {m} (write value=\"400:0.2, 500:0.5, 700:0.9\", wavelengths in nm)"
+                        ))
+                    })?;
+                    let usage = if self.in_emitter {
+                        SpectrumUse::Emission
+                    } else if matches!(name, "eta" | "k") {
+                        SpectrumUse::Unbounded
+                    } else {
+                        SpectrumUse::Bounded
+                    };
+                    return Ok(to_srgb(&w, &v, usage));
                 }
                 let v = parse_list(self.node, name, s)?;
                 if v.len() != 1 {
