@@ -207,6 +207,9 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
             "medium" => {
                 media::medium_id(&mut ctx, n)?;
             }
+            // A sampler, film or filter declared at the top level is used
+            // where a <ref> names it (Mitsuba's documentation scenes do this).
+            "sampler" | "film" | "rfilter" if n.attr("id").is_some() => {}
             other => {
                 return Err(n.err(format!(
                     "unsupported element <{other}> in <scene> (supported: {}, default, include)",
