@@ -15,6 +15,9 @@ pub struct Camera {
     /// tan of the half field of view along film x and y.
     tan_x: f32,
     tan_y: f32,
+    /// Mitsuba's principal point offset, in pixels (0 leaves the
+    /// arithmetic, and so the image, bit-identical to a camera without it).
+    pp: [f32; 2],
     pub width: u32,
     pub height: u32,
     near: f32,
@@ -58,6 +61,10 @@ impl Camera {
             to_world: Affine3A::from_mat4(s.to_world),
             tan_x,
             tan_y,
+            pp: [
+                s.principal_point[0] * s.width as f32,
+                s.principal_point[1] * s.height as f32,
+            ],
             width: s.width,
             height: s.height,
             near: s.near_clip,
@@ -68,8 +75,10 @@ impl Camera {
     /// The ray through film position `(fx, fy)` in pixels from the top-left
     /// corner, with its maximum distance (the far plane).
     pub fn generate_ray(&self, fx: f32, fy: f32) -> (Ray, f32) {
-        let nx = 2.0 * fx / self.width as f32 - 1.0;
-        let ny = 2.0 * fy / self.height as f32 - 1.0;
+        // Mitsuba adds the principal point offset to the film position
+        // (as a fraction of the film) before the projection.
+        let nx = 2.0 * (fx + self.pp[0]) / self.width as f32 - 1.0;
+        let ny = 2.0 * (fy + self.pp[1]) / self.height as f32 - 1.0;
         // The point on the local z = 1 plane; its distance `len` from the
         // eye scales the near and far planes (given along the view axis)
         // into distances along the ray.
@@ -105,6 +114,7 @@ mod tests {
             ),
             fov: 90.0,
             fov_axis,
+            principal_point: [0.0, 0.0],
             near_clip: 0.01,
             far_clip: 100.0,
             width: w,

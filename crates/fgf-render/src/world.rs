@@ -53,6 +53,9 @@ pub struct World {
     pub max_depth: u32,
     pub rr_depth: u32,
     pub hide_emitters: bool,
+    /// `Some((emitter_samples, bsdf_samples))` for Mitsuba's `direct`
+    /// integrator; `None` for `path` and `volpath`.
+    pub direct_samples: Option<(u32, u32)>,
     /// Some shape has a `null` BSDF: paths then ask for the two nearest
     /// hits, so that crossing the boundary needs no second traversal.
     pub(crate) any_null: bool,
@@ -124,6 +127,13 @@ impl World {
             },
             rr_depth: desc.integrator.rr_depth,
             hide_emitters: desc.integrator.hide_emitters,
+            direct_samples: match desc.integrator.kind {
+                fgf_scene::IntegratorKind::Direct {
+                    emitter_samples,
+                    bsdf_samples,
+                } => Some((emitter_samples, bsdf_samples)),
+                _ => None,
+            },
         })
     }
 

@@ -39,6 +39,7 @@ fn sensor(origin: Vec3, target: Vec3, up: Vec3, fov: f32, res: u32, spp: u32) ->
         to_world,
         fov,
         fov_axis: FovAxis::X,
+        principal_point: [0.0, 0.0],
         near_clip: 1e-3,
         far_clip: 1e4,
         width: res,

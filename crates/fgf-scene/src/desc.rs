@@ -36,10 +36,17 @@ pub struct SceneDesc {
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum IntegratorKind {
-    /// `volpath`: volumetric path tracing with NEE + MIS.
+    /// Volumetric path tracing (`volpath`, and `volpathmis`, which has the same expectation).
     Volpath,
-    /// `path`: surfaces only; a scene with media and `path` is invalid.
+    /// Path tracing without media (`path`).
     Path,
+    /// Mitsuba's `direct`: emission seen directly plus direct illumination
+    /// at the first surface, from `emitter_samples` light samples and
+    /// `bsdf_samples` BSDF samples combined by the power heuristic; no media.
+    Direct {
+        emitter_samples: u32,
+        bsdf_samples: u32,
+    },
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -80,6 +87,10 @@ pub struct SensorDesc {
     /// XML is converted to the x field of view, with `fov_axis = X`).
     pub fov: f32,
     pub fov_axis: FovAxis,
+    /// Mitsuba's `principal_point_offset_x/y`: the film position of the
+    /// optical axis, as a fraction of the film's width and height (x to the
+    /// right, y down), relative to its centre.
+    pub principal_point: [f32; 2],
     pub near_clip: f32,
     pub far_clip: f32,
     pub width: u32,

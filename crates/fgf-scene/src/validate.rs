@@ -362,11 +362,16 @@ impl SceneDesc {
         let d = &self.integrator;
         range("max_depth", d.max_depth as i64, MAX_DEPTH)?;
         range("rr_depth", d.rr_depth as i64, RR_DEPTH)?;
-        if d.kind == IntegratorKind::Path && !self.media.is_empty() {
+        if d.kind != IntegratorKind::Volpath && !self.media.is_empty() {
+            let ty = if d.kind == IntegratorKind::Path {
+                "path"
+            } else {
+                "direct"
+            };
             return fail(
                 None,
                 format!(
-                    "the 'path' integrator ignores participating media, but this scene has {} (the first: {}); use <integrator type=\"volpath\">",
+                    "the '{ty}' integrator ignores participating media, but this scene has {} (the first: {}); use <integrator type=\"volpath\">",
                     self.media.len(),
                     name(Subject::Medium(0))
                 ),

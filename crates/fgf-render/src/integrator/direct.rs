@@ -119,7 +119,7 @@ impl Scatterer for SurfaceVertex<'_> {
 impl World {
     /// Pick an emitter uniformly and sample it as seen from `p`.
     #[inline]
-    fn sample_emitter(&self, p: Vec3, s: &mut Sampler) -> Option<LightSample> {
+    pub(super) fn sample_emitter(&self, p: Vec3, s: &mut Sampler) -> Option<LightSample> {
         if self.emitters.is_empty() {
             return None;
         }
@@ -168,7 +168,13 @@ impl World {
     /// kept [`MAX_CROSSINGS`] at a time, nearest first; a segment crossing
     /// more boundaries than that is resumed with a further query past the
     /// last crossing handled.
-    fn shadow(&self, from: &ShadowOrigin, wi: Vec3, dist: f32, s: &mut Sampler) -> Spectrum {
+    pub(super) fn shadow(
+        &self,
+        from: &ShadowOrigin,
+        wi: Vec3,
+        dist: f32,
+        s: &mut Sampler,
+    ) -> Spectrum {
         let ShadowOrigin {
             p,
             n,

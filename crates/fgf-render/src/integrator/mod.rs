@@ -18,10 +18,13 @@
 //!   estimates); any other surface blocks them.
 //! * Russian roulette once the depth exceeds `rr_depth`: survival probability
 //!   `min(max(throughput)·η², 0.95)`.
+//! * `direct` (Mitsuba's direct-illumination integrator) is a separate
+//!   routine, [`World::li_direct`] in `direct_lighting.rs`.
 //! * RGB throughput; media sample free flights with spectral MIS (see
 //!   [`crate::medium`]).
 
 mod direct;
+mod direct_lighting;
 
 use crate::emitter::Emitter;
 use crate::geometry::Hit;
@@ -45,6 +48,9 @@ enum Known<T> {
 impl World {
     /// Radiance arriving at the camera along `ray` (one sample).
     pub fn li(&self, mut ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
+        if let Some((n_e, n_b)) = self.direct_samples {
+            return self.li_direct(ray, t_max_primary, n_e, n_b, s);
+        }
         let mut l = Spectrum::ZERO;
         let mut thr = Spectrum::ONE;
         if self.max_depth == 0 {

@@ -35,7 +35,8 @@
 //! the notes here are about the implementation.
 //!
 //! * `homogeneous`: analytic free flights, one-sample MIS over the RGB channels
-//! * `heterogeneous`: delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA
+//! * `heterogeneous`: delta tracking / ratio tracking on a 16³ majorant grid traversed by 3D-DDA;
+//!   a constant `sigma_t` is a one-voxel grid over the unit cube, where Mitsuba 3 puts it
 //! * `fgf`, `nonexponential`: non-exponential transmittance (`docs/theory.md` §3–4): see [`nonexp`]
 
 pub mod dda;
@@ -49,7 +50,23 @@ use crate::math::Sampler;
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{from_rgb, Spectrum};
-use fgf_scene::{MediumDesc, VolumeDesc};
+use fgf_scene::{GridVolumeDesc, MediumDesc, VolumeDesc};
+
+/// A constant volume over the unit cube `[0, 1]³` (identity `to_world`).
+fn constant_unit_cube(c: fgf_scene::Rgb) -> GridVolumeDesc {
+    GridVolumeDesc {
+        grid: std::sync::Arc::new(fgf_io::vol::VolGrid {
+            shape: [1, 1, 1],
+            channels: 3,
+            bbox: [0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            data: c.to_vec(),
+        }),
+        to_world: glam::Mat4::IDENTITY,
+        use_grid_bbox: false,
+        filter: fgf_scene::GridFilter::Nearest,
+        wrap_clamp: true,
+    }
+}
 
 /// How the current free-flight segment started (`docs/theory.md` §4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,12 +128,17 @@ impl Medium {
             } => homogeneous(from_rgb(*sigma_t), *albedo, phase),
             MediumDesc::Heterogeneous {
                 sigma_t: VolumeDesc::Constant(s),
-                albedo: VolumeDesc::Constant(a),
+                albedo,
                 scale,
                 phase,
             } => {
-                // Constant volumes make a homogeneous medium (same transport).
-                homogeneous(from_rgb(*s) * *scale, *a, phase)
+                // As in Mitsuba 3, the medium exists only inside the bounding
+                // box of its sigma_t volume, and a constant (a float, an rgb or
+                // a `constvolume` without to_world) is a volume over the unit
+                // cube [0, 1]^3: a one-voxel grid there.
+                let g = constant_unit_cube(*s);
+                let m = grid::GridMedium::new(&g, albedo, *scale, Phase::from_desc(phase), index)?;
+                Ok(Medium::Grid(Box::new(m)))
             }
             MediumDesc::Heterogeneous {
                 sigma_t: VolumeDesc::Grid(g),
@@ -127,14 +149,6 @@ impl Medium {
                 let m = grid::GridMedium::new(g, albedo, *scale, Phase::from_desc(phase), index)?;
                 Ok(Medium::Grid(Box::new(m)))
             }
-            MediumDesc::Heterogeneous {
-                sigma_t: VolumeDesc::Constant(_),
-                albedo: VolumeDesc::Grid(_),
-                ..
-            } => Err(RenderError::Unsupported(format!(
-                "medium {index}: a heterogeneous medium with a constant sigma_t and a grid albedo \
-                 is not supported; give sigma_t as a gridvolume"
-            ))),
             MediumDesc::NonExponential { .. } => Ok(Medium::NonExp(Box::new(
                 nonexp::NonExp::from_desc(d, index)?,
             ))),

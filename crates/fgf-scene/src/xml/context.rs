@@ -27,6 +27,8 @@ pub(crate) struct Ctx<'a> {
     pub medium_nodes: Vec<&'a XNode>,
     /// Ids being instantiated (reference cycle detection).
     pub resolving: Vec<String>,
+    /// Top-level `area` emitters referenced by a shape, with that shape.
+    pub area_refs: HashMap<String, &'a XNode>,
 }
 
 impl<'a> Ctx<'a> {
@@ -49,6 +51,7 @@ impl<'a> Ctx<'a> {
             medium_by_id: HashMap::new(),
             medium_nodes: Vec::new(),
             resolving: Vec::new(),
+            area_refs: HashMap::new(),
         })
     }
 }

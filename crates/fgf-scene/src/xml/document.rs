@@ -26,8 +26,12 @@ pub(crate) struct XNode {
     pub children: Vec<XNode>,
     /// The file this element was written in (the scene or an included file).
     pub file: Arc<PathBuf>,
-    /// Directory that relative file names in this element resolve against.
+    /// Directory of the file this element was written in.
     pub dir: Arc<PathBuf>,
+    /// Mitsuba's file resolver at instantiation time: the `<path>`
+    /// directories (the last declared first), then the scene's directory.
+    /// Filled in once the whole document is parsed.
+    pub search: Arc<Vec<PathBuf>>,
     pub line: u32,
     pub col: u32,
 }
@@ -87,14 +91,31 @@ impl XNode {
             .ok_or_else(|| self.err(format!("missing attribute '{key}'")))
     }
 
-    /// Resolve a file name written in this element against its directory.
+    /// Resolve a file name written in this element as Mitsuba's file
+    /// resolver does: an absolute name as is; a relative one against the
+    /// `<path>` directories (the last declared first), then the scene's
+    /// directory, then (an fgf extension, for included files kept in another
+    /// directory) the directory of the file this element is in, then the
+    /// working directory. The first candidate that exists wins; when none
+    /// exists the name is joined to the element's own directory, for the
+    /// error message.
     pub fn resolve(&self, file: &str) -> PathBuf {
         let p = Path::new(file);
         if p.is_absolute() {
-            p.to_path_buf()
-        } else {
-            self.dir.join(p)
+            return p.to_path_buf();
         }
+        let candidates = self
+            .search
+            .iter()
+            .map(|d| d.join(p))
+            .chain(std::iter::once(self.dir.join(p)))
+            .chain(std::iter::once(p.to_path_buf()));
+        for c in candidates {
+            if c.exists() {
+                return c;
+            }
+        }
+        self.dir.join(p)
     }
 }
 
@@ -108,6 +129,16 @@ struct Builder {
     used: RefCell<HashSet<String>>,
     /// Canonical paths of the files being included (cycle detection).
     stack: Vec<PathBuf>,
+    /// Directories of the files being included, innermost last: an
+    /// `<include>` is resolved against them first, as Mitsuba does.
+    dir_stack: Vec<PathBuf>,
+    /// The scene file's directory.
+    scene_dir: PathBuf,
+    /// `<path value>` directories, in the order they were declared.
+    paths: Vec<PathBuf>,
+    /// The file being read is older than Mitsuba 2.0: its names are
+    /// upgraded ([`upgrade_v1`]).
+    upgrade: bool,
     nodes: usize,
 }
 
@@ -126,6 +157,10 @@ pub(crate) fn build(
         declared: HashSet::new(),
         used: RefCell::new(HashSet::new()),
         stack: Vec::new(),
+        dir_stack: Vec::new(),
+        scene_dir: base_dir.to_path_buf(),
+        paths: Vec::new(),
+        upgrade: false,
         nodes: 0,
     };
     for (k, v) in defines {
@@ -145,6 +180,13 @@ pub(crate) fn build(
     let dir = Arc::new(base_dir.to_path_buf());
     let mut out = Vec::new();
     b.file(xml, &file, &dir, &mut out)?;
+    // Every element resolves its file names with the final resolver: in
+    // Mitsuba the plugins are instantiated after the whole document (every
+    // `<path>`) has been read.
+    let search: Arc<Vec<PathBuf>> = Arc::new(b.search_dirs());
+    for n in &mut out {
+        set_search(n, &search);
+    }
     for (k, _) in defines {
         if !b.declared.contains(k) && !b.used.borrow().contains(k) {
             let mut known: Vec<&str> = b.declared.iter().map(|s| s.as_str()).collect();
@@ -161,6 +203,69 @@ pub(crate) fn build(
         }
     }
     Ok((out, None))
+}
+
+fn set_search(n: &mut XNode, search: &Arc<Vec<PathBuf>>) {
+    n.search = search.clone();
+    for c in &mut n.children {
+        set_search(c, search);
+    }
+}
+
+/// Mitsuba 3's upgrade of a pre-2.0 property name: camelCase to
+/// snake_case (an underscore before an upper-case letter that follows a
+/// lower-case one, and that run of capitals in lower case: `intIOR` →
+/// `int_ior`, `toWorld` → `to_world`, `maxDepth` → `max_depth`).
+pub(crate) fn camel_to_snake(name: &str) -> String {
+    let c: Vec<char> = name.chars().collect();
+    let mut out = String::with_capacity(name.len() + 4);
+    let mut i = 0;
+    while i < c.len() {
+        if i > 0 && c[i - 1].is_ascii_lowercase() && c[i].is_ascii_uppercase() {
+            out.push('_');
+            out.push(c[i].to_ascii_lowercase());
+            while i + 1 < c.len() && c[i + 1].is_ascii_uppercase() {
+                i += 1;
+                out.push(c[i].to_ascii_lowercase());
+            }
+        } else {
+            out.push(c[i]);
+        }
+        i += 1;
+    }
+    out
+}
+
+/// The major and minor numbers of a `version="x.y.z"` attribute.
+fn parse_version(v: &str) -> Option<(u32, u32)> {
+    let mut it = v.trim().split('.');
+    let major = it.next()?.trim().parse().ok()?;
+    let minor = match it.next() {
+        Some(m) => m.trim().parse().ok()?,
+        None => 0,
+    };
+    for rest in it {
+        rest.trim().parse::<u32>().ok()?;
+    }
+    Some((major, minor))
+}
+
+/// Mitsuba 3's upgrade of an element of a pre-2.0 file: every property
+/// name of a plugin goes from camelCase to snake_case, and a `diffuse`
+/// BSDF's `diffuse_reflectance` becomes `reflectance`. Texture offsets
+/// (`uoffset` ...), which Mitsuba turns into a `to_uv` transform, are left
+/// to the texture's own parameter check.
+fn upgrade_v1(node: &mut XNode) {
+    let is_diffuse = node.tag == "bsdf" && node.attr("type") == Some("diffuse");
+    for c in &mut node.children {
+        if let Some((_, v)) = c.attrs.iter_mut().find(|(k, _)| k == "name") {
+            let mut new = camel_to_snake(v);
+            if is_diffuse && new == "diffuse_reflectance" {
+                new = "reflectance".to_string();
+            }
+            *v = new;
+        }
+    }
 }
 
 fn is_ident(s: &str) -> bool {
@@ -213,23 +318,55 @@ impl Builder {
                 "the root element must be <scene version=\"3.0.0\">".into(),
             ));
         }
-        match root.attribute("version") {
+        let upgrade = match root.attribute("version") {
             None => {
                 return Err(here(
                     Some("<scene>".into()),
                     "missing attribute 'version' (write <scene version=\"3.0.0\">)".into(),
                 ))
             }
-            Some(v) => {
-                let major = v.split('.').next().unwrap_or("");
-                if major.trim() != "3" {
+            Some(v) => match parse_version(v) {
+                None => {
                     return Err(here(
                         Some("<scene>".into()),
-                        format!("version \"{v}\" is not supported: this loader reads Mitsuba 3 scenes (version=\"3.x.y\")"),
-                    ));
+                        format!("invalid version number \"{v}\" (write major.minor.patch, e.g. \"3.0.0\")"),
+                    ))
                 }
-            }
-        }
+                Some((major, _)) if major > 3 => {
+                    return Err(here(
+                        Some("<scene>".into()),
+                        format!("version \"{v}\" is newer than this loader, which reads Mitsuba 3 scenes (and older ones, upgraded as Mitsuba 3 does)"),
+                    ))
+                }
+                // Mitsuba 3 upgrades the files older than 2.0 (camelCase
+                // names); 2.x files are read as they are.
+                Some((major, _)) => major < 2,
+            },
+        };
+        let outer_upgrade = std::mem::replace(&mut self.upgrade, upgrade);
+        let r = self.file_body(&doc, root, file, dir, out);
+        self.upgrade = outer_upgrade;
+        r
+    }
+
+    /// The `<scene>` element of one file: its attributes, `<default>`s,
+    /// `<path>`s, includes and objects.
+    fn file_body(
+        &mut self,
+        doc: &roxmltree::Document,
+        root: roxmltree::Node,
+        file: &Arc<PathBuf>,
+        dir: &Arc<PathBuf>,
+        out: &mut Vec<XNode>,
+    ) -> Result<(), SceneError> {
+        let (line, col) = pos_of(doc, root);
+        let here = |tag: Option<String>, msg: String| SceneError {
+            kind: SceneErrorKind::Invalid,
+            file: file.as_ref().clone(),
+            pos: Some((line, col)),
+            tag,
+            message: msg,
+        };
         for a in root.attributes() {
             if a.name() != "version" {
                 return Err(here(
@@ -242,7 +379,7 @@ impl Builder {
         // `<default>` that defines it, as in Mitsuba. The caller's defines win.
         for child in root.children().filter(|n| n.is_element()) {
             if child.tag_name().name() == "default" {
-                let node = self.convert(&doc, child, file, dir, 0)?;
+                let node = self.convert(doc, child, file, dir, 0)?;
                 node.check_attrs(&["name", "value"])?;
                 let name = node.req_attr("name")?;
                 let value = node.req_attr("value")?;
@@ -262,7 +399,7 @@ impl Builder {
         }
         for child in root.children() {
             if child.is_text() && !child.text().unwrap_or("").trim().is_empty() {
-                let (l, c) = pos_of(&doc, child);
+                let (l, c) = pos_of(doc, child);
                 return Err(SceneError {
                     kind: SceneErrorKind::Invalid,
                     file: file.as_ref().clone(),
@@ -277,11 +414,15 @@ impl Builder {
             match child.tag_name().name() {
                 "default" => {}
                 "include" => {
-                    let node = self.convert(&doc, child, file, dir, 0)?;
+                    let node = self.convert(doc, child, file, dir, 0)?;
                     self.include(&node, out)?;
                 }
+                "path" => {
+                    let node = self.convert(doc, child, file, dir, 0)?;
+                    self.path(&node)?;
+                }
                 _ => {
-                    let node = self.convert(&doc, child, file, dir, 0)?;
+                    let node = self.convert(doc, child, file, dir, 0)?;
                     out.push(node);
                 }
             }
@@ -300,7 +441,7 @@ impl Builder {
             )));
         }
         let name = node.req_attr("filename")?;
-        let path = node.resolve(name);
+        let path = self.resolve_include(node, name);
         let bytes = std::fs::read(&path).map_err(|e| {
             node.err_kind(
                 SceneErrorKind::Io,
@@ -331,7 +472,9 @@ impl Builder {
             _ => PathBuf::from("."),
         });
         self.stack.push(canon);
+        self.dir_stack.push(node.dir.as_ref().clone());
         let r = self.file(&text, &file, &dir, out);
+        self.dir_stack.pop();
         self.stack.pop();
         // Name the including line too: the included file's own error is
         // complete, but the user needs to know where it was included from.
@@ -345,6 +488,66 @@ impl Builder {
             );
             e
         })
+    }
+
+    /// The resolver's directories after the scene directory's own: the
+    /// `<path>`s, the last declared first, then the scene's directory.
+    fn search_dirs(&self) -> Vec<PathBuf> {
+        let mut v: Vec<PathBuf> = self.paths.iter().rev().cloned().collect();
+        v.push(self.scene_dir.clone());
+        v
+    }
+
+    /// An `<include>`'s file, found as Mitsuba finds it: against the
+    /// including file's directory (and those of the files including it),
+    /// then the `<path>`s read so far, the scene's directory and the working
+    /// directory.
+    fn resolve_include(&self, node: &XNode, name: &str) -> PathBuf {
+        let p = Path::new(name);
+        if p.is_absolute() {
+            return p.to_path_buf();
+        }
+        let dirs = std::iter::once(node.dir.as_ref().clone())
+            .chain(self.dir_stack.iter().rev().cloned())
+            .chain(self.search_dirs());
+        for d in dirs {
+            let c = d.join(p);
+            if c.exists() {
+                return c;
+            }
+        }
+        if p.exists() {
+            return p.to_path_buf();
+        }
+        node.dir.join(p)
+    }
+
+    /// `<path value="dir"/>`: a directory added to the file resolver, as in
+    /// Mitsuba: relative to the file it is written in, else found through
+    /// the resolver; it must exist.
+    fn path(&mut self, node: &XNode) -> Result<(), SceneError> {
+        node.check_attrs(&["value"])?;
+        if !node.children.is_empty() {
+            return Err(node.err("<path> takes no children"));
+        }
+        let value = node.req_attr("value")?;
+        let p = Path::new(value);
+        let mut dir = if p.is_absolute() {
+            p.to_path_buf()
+        } else {
+            node.dir.join(p)
+        };
+        if !dir.is_dir() && !p.is_absolute() {
+            dir = self.resolve_include(node, value);
+        }
+        if !dir.is_dir() {
+            return Err(node.err_kind(
+                SceneErrorKind::Io,
+                format!("<path>: directory '{}' not found", dir.display()),
+            ));
+        }
+        self.paths.push(dir);
+        Ok(())
     }
 
     /// Convert an element and its descendants, substituting `$name`s.
@@ -364,6 +567,7 @@ impl Builder {
             children: Vec::new(),
             file: file.clone(),
             dir: dir.clone(),
+            search: Arc::new(Vec::new()),
             line,
             col,
         };
@@ -384,7 +588,7 @@ impl Builder {
         }
         for c in n.children() {
             if c.is_element() {
-                if matches!(c.tag_name().name(), "default" | "include") {
+                if matches!(c.tag_name().name(), "default" | "include" | "path") {
                     let child = self.convert(doc, c, file, dir, depth + 1)?;
                     return Err(child.err(format!(
                         "<{}> is only allowed directly inside <scene>",
@@ -399,6 +603,9 @@ impl Builder {
                     c.text().unwrap_or("").trim().chars().take(40).collect::<String>()
                 )));
             }
+        }
+        if self.upgrade {
+            upgrade_v1(&mut node);
         }
         Ok(node)
     }

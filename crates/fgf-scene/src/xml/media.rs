@@ -13,12 +13,18 @@
 //! | both | `albedo` | float or rgb; `heterogeneous`: or a nested `volume` | – | in [0, 1] | 0.75 | single-scattering albedo |
 //! | both | `scale` | float | – | ≥ 0 | 1 | multiplies `sigma_t` |
 //! | both | `sample_emitters` | boolean | – | – | true | accepted; it does not change the expected image |
+//! | both | `has_spectral_extinction` | boolean | – | – | true | accepted; in Mitsuba's RGB variants it does not change the expected image (fgf always samples an RGB `sigma_t` per channel) |
 //! | both | nested `phase` | – | – | one, see [`super::phase`] | isotropic | |
 //!
-//! `homogeneous` takes constants (a `constvolume` too). `heterogeneous`
-//! takes the volumes of [`super::volumes`]: a grid `sigma_t` with a
-//! constant or grid `albedo`; with two constants it is homogeneous, and a
-//! constant `sigma_t` with a grid `albedo` is not supported by the renderer.
+//! `homogeneous` takes a constant `sigma_t` (a `constvolume` too) and fills
+//! its whole shape; its `albedo` may also be a `gridvolume` (a 3D texture
+//! evaluated at each scattering point). `heterogeneous` takes the volumes of
+//! [`super::volumes`] for both, and, as in Mitsuba 3, **exists only inside
+//! the bounding box of its `sigma_t` volume**: a grid's box, and for a
+//! constant `sigma_t` (a float, an rgb or a `constvolume`) the unit cube
+//! `[0, 1]³`, moved by the `constvolume`'s `to_world`. A heterogeneous
+//! cube over `[-1, 1]³` with a float `sigma_t` is thus filled only in its
+//! positive octant.
 //!
 //! ```xml
 //! <shape type="cube">
@@ -91,6 +97,7 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
             "albedo",
             "scale",
             "sample_emitters",
+            "has_spectral_extinction",
             "sigma_s",
             "sigma_a",
         ],
@@ -127,8 +134,9 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
     let d = match ty {
         "homogeneous" => {
             let sigma_t = constant_of(ctx, &p, "sigma_t", 1.0, NON_NEGATIVE)?;
-            let albedo = constant_of(ctx, &p, "albedo", 0.75, UNIT)?;
+            let albedo = volumes::volume_of(ctx, &p, "albedo", 0.75, UNIT)?;
             p.bool_or("sample_emitters", true)?;
+            p.bool_or("has_spectral_extinction", true)?;
             let sigma_t = sigma_t.map(|c| c * scale);
             if sigma_t.iter().any(|&c| c > f32::MAX as f64) {
                 return Err(n.err(format!(
@@ -136,16 +144,31 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
                     sigma_t.iter().cloned().fold(0.0, f64::max)
                 )));
             }
-            MediumDesc::Homogeneous {
-                sigma_t: rgb(sigma_t),
-                albedo: rgb(albedo),
-                phase,
+            match albedo {
+                VolumeDesc::Constant(albedo) => MediumDesc::Homogeneous {
+                    sigma_t: rgb(sigma_t),
+                    albedo,
+                    phase,
+                },
+                // A 3D texture albedo (Mitsuba evaluates it at each
+                // scattering point): the same transport as a heterogeneous
+                // medium whose constant sigma_t fills all of space.
+                albedo @ VolumeDesc::Grid(_) => MediumDesc::Heterogeneous {
+                    sigma_t: VolumeDesc::Grid(volumes::constant_grid(
+                        rgb(sigma_t),
+                        volumes::everywhere(),
+                    )),
+                    albedo,
+                    scale: 1.0,
+                    phase,
+                },
             }
         }
         "heterogeneous" => {
             let sigma_t = volumes::volume_of(ctx, &p, "sigma_t", 1.0, NON_NEGATIVE)?;
             let albedo = volumes::volume_of(ctx, &p, "albedo", 0.75, UNIT)?;
             p.bool_or("sample_emitters", true)?;
+            p.bool_or("has_spectral_extinction", true)?;
             MediumDesc::Heterogeneous {
                 sigma_t,
                 albedo,
@@ -169,6 +192,11 @@ fn constant_of(
 ) -> Result<[f64; 3], SceneError> {
     match volumes::volume_of(ctx, p, name, default, r)? {
         VolumeDesc::Constant(c) => Ok(c.map(|x| x as f64)),
+        // A constvolume with a to_world: a homogeneous medium fills its
+        // shape whatever the volume's box, as in Mitsuba.
+        VolumeDesc::Grid(g) if volumes::constant_value(&g).is_some() => Ok(volumes::constant_value(&g)
+            .unwrap_or_default()
+            .map(|x| x as f64)),
         VolumeDesc::Grid(_) => Err(p.node.err(format!(
             "'{name}' of a homogeneous medium must be a constant; use a heterogeneous medium for a grid"
         ))),

@@ -20,11 +20,12 @@
 //! * Document: `<scene version="3.x">`, `<default name value>` with `$name`
 //!   substitution in every attribute value (overridden by the caller's
 //!   defines; a define without a `<default>` is substituted too),
-//!   `<include filename>` (relative to the including file; cycles are
-//!   errors), `id` attributes and `<ref id>` / `<ref name="interior" id>`.
+//!   `<include filename>` and `<path value>` (file lookup below; cycles
+//!   are errors), `id` attributes and `<ref id>` / `<ref name="interior" id>`.
 //! * Properties: `float`, `integer`, `boolean`, `string`, `rgb` (`"0.8"`,
-//!   `"0.1, 0.2, 0.3"` or `"0.1 0.2 0.3"`), `spectrum` (one uniform value
-//!   only), `point`/`vector` (`x y z` attributes or `value`), `transform`
+//!   `"0.1, 0.2, 0.3"` or `"0.1 0.2 0.3"`), `spectrum` (one uniform value,
+//!   or wavelength:value pairs converted to RGB as Mitsuba's RGB variants
+//!   convert them; see `spectrum.rs`), `point`/`vector` (`x y z` attributes or `value`), `transform`
 //!   (`translate`, `rotate`, `scale`, `matrix`, `lookat`; the composed
 //!   matrix is `M_last · … · M_first`; see `transform.rs`).
 //! * Plugins: one module per family, each opening with the family's
@@ -38,6 +39,25 @@
 //!   not 0.5); an `obj`/`ply` without vertex normals is smooth-shaded with
 //!   computed angle-weighted normals unless `face_normals="true"` (both in
 //!   [`shapes`]); a `rotate` axis is not normalised.
+//!
+//! # Finding files
+//!
+//! As in Mitsuba 3, a relative file name (a mesh, a grid, an include) is
+//! looked up in the `<path value="dir"/>` directories (the last declared
+//! first; a relative `dir` is taken from the file it is written in), then
+//! the scene file's directory, then the working directory; an `<include>`
+//! is looked up in the including file's directory first. fgf also tries the
+//! directory of the file an element is written in (for includes kept next
+//! to their meshes) before the working directory.
+//!
+//! # Scene versions
+//!
+//! `version="3.x"` and `"2.x"` files are read as written (Mitsuba 3 does
+//! not change 2.x files). Files older than 2.0 are upgraded as Mitsuba 3
+//! upgrades them: every parameter name goes from camelCase to snake_case
+//! (`intIOR` → `int_ior`, `toWorld` → `to_world`) and a `diffuse` BSDF's
+//! `diffuse_reflectance` becomes `reflectance`; each included file is
+//! upgraded by its own version.
 //!
 //! # Units
 //!
@@ -65,6 +85,7 @@
 //!    line.
 
 pub mod bsdfs;
+mod cie;
 mod context;
 mod document;
 pub mod emitters;
@@ -77,6 +98,7 @@ pub mod phase;
 mod props;
 pub mod sensors;
 pub mod shapes;
+mod spectrum;
 mod tables;
 mod transform;
 pub mod volumes;
@@ -145,6 +167,7 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
     let mut shape_nodes = Vec::new();
     let mut emitters = Vec::new();
     let mut emitter_nodes = Vec::new();
+    let mut area_decls = Vec::new();
     for n in nodes {
         match n.tag.as_str() {
             "integrator" => {
@@ -172,6 +195,11 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
             "bsdf" => {
                 bsdfs::bsdf_id(&mut ctx, n)?;
             }
+            // A top-level area emitter with an id is instantiated by the
+            // shape that references it (checked below).
+            "emitter" if n.attr("type") == Some("area") && n.attr("id").is_some() => {
+                area_decls.push(n);
+            }
             "emitter" => {
                 emitters.push(emitters::emitter_desc(&ctx, n, false)?);
                 emitter_nodes.push(n);
@@ -179,12 +207,21 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
             "medium" => {
                 media::medium_id(&mut ctx, n)?;
             }
+            // A sampler, film or filter declared at the top level is used
+            // where a <ref> names it (Mitsuba's documentation scenes do this).
+            "sampler" | "film" | "rfilter" if n.attr("id").is_some() => {}
             other => {
                 return Err(n.err(format!(
                     "unsupported element <{other}> in <scene> (supported: {}, default, include)",
                     TOP_LEVEL.join(", ")
                 )))
             }
+        }
+    }
+    for n in area_decls {
+        if !ctx.area_refs.contains_key(n.attr("id").unwrap_or("")) {
+            // Unreferenced: the emitter's own message (it needs a shape).
+            emitters::emitter_desc(&ctx, n, false)?;
         }
     }
     nonexp::resolve_default_lengths(&mut ctx, &shapes)?;

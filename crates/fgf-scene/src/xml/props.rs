@@ -7,6 +7,7 @@
 
 use super::document::XNode;
 use super::parse::{parse_f64, parse_list, xyz_or_value};
+use super::spectrum::{parse_pairs, to_srgb, SpectrumUse};
 use super::transform;
 use crate::error::SceneError;
 use crate::validate::{out_of_range, out_of_range_rgb, Range};
@@ -49,8 +50,22 @@ pub(crate) struct Entry<'a> {
     pub node: &'a XNode,
     pub target: &'a XNode,
     pub name: Option<&'a str>,
+    /// The plugin this entry belongs to is an `<emitter>` (Mitsuba converts
+    /// a uniform spectrum differently there).
+    in_emitter: bool,
     used: Cell<bool>,
 }
+
+/// Linear sRGB of the equal-energy spectrum of value 1 (XYZ = (1, 1, 1)):
+/// the row sums of the XYZ → linear sRGB matrix of IEC 61966-2-1. Mitsuba's
+/// RGB variants give a uniform `<spectrum>` in an emitter this colour (its
+/// spectral variants' D65 white point makes the equal-energy spectrum
+/// slightly purple), and every other uniform spectrum a grey.
+const EQUAL_ENERGY_SRGB: [f64; 3] = [
+    3.240479 - 1.537150 - 0.498535,
+    -0.969256 + 1.875991 + 0.041556,
+    0.055648 - 0.204043 + 1.057311,
+];
 
 impl<'a> Entry<'a> {
     pub fn is_property(&self) -> bool {
@@ -119,7 +134,8 @@ impl<'a> Entry<'a> {
     }
 
     /// A colour: `<float>`/`<integer>` (grey), `<rgb>` (1 or 3 values) or a
-    /// uniform `<spectrum>` (one value).
+    /// uniform `<spectrum>` (one value: grey, or in an emitter the linear
+    /// sRGB of the equal-energy spectrum, as in Mitsuba's RGB variants).
     pub fn color(&self) -> Result<[f64; 3], SceneError> {
         let name = self.name.unwrap_or("?");
         match self.node.tag.as_str() {
@@ -141,9 +157,19 @@ impl<'a> Entry<'a> {
             "spectrum" => {
                 let s = self.value_attr()?;
                 if s.contains(':') {
-                    return Err(self.node.err(format!(
-                        "spectrum '{name}' with wavelength:value pairs is not supported (this renderer is RGB); use <rgb name=\"{name}\" value=\"r, g, b\"/> or a single uniform value"
-                    )));
+                    let (w, v) = parse_pairs(s).map_err(|m| {
+                        self.node.err(format!(
+                            "spectrum '{name}': {m} (write value=\"400:0.2, 500:0.5, 700:0.9\", wavelengths in nm)"
+                        ))
+                    })?;
+                    let usage = if self.in_emitter {
+                        SpectrumUse::Emission
+                    } else if matches!(name, "eta" | "k") {
+                        SpectrumUse::Unbounded
+                    } else {
+                        SpectrumUse::Bounded
+                    };
+                    return Ok(to_srgb(&w, &v, usage));
                 }
                 let v = parse_list(self.node, name, s)?;
                 if v.len() != 1 {
@@ -152,7 +178,11 @@ impl<'a> Entry<'a> {
                         v.len()
                     )));
                 }
-                Ok([v[0]; 3])
+                if self.in_emitter {
+                    Ok(EQUAL_ENERGY_SRGB.map(|c| c * v[0]))
+                } else {
+                    Ok([v[0]; 3])
+                }
             }
             _ => Err(self.expect("a <float>, <rgb> or uniform <spectrum>")),
         }
@@ -258,6 +288,7 @@ impl<'a> Props<'a> {
                 node: c,
                 target,
                 name,
+                in_emitter: node.tag == "emitter",
                 used: Cell::new(false),
             });
         }

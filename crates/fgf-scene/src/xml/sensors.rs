@@ -12,9 +12,17 @@
 //! | `perspective` | `fov_axis` | string | – | `x`, `y`, `smaller`, `larger` | `x` | the film axis `fov` applies to |
 //! | `perspective` | `near_clip`, `far_clip` | float | length | 0 < near_clip < far_clip | 0.01, 10000 | |
 //! | `perspective` | `to_world` | transform | – | rigid (rotation and translation) | identity | camera to world |
+//! | `perspective` | `principal_point_offset_x`, `principal_point_offset_y` | float | film width, height | finite | 0 | the optical axis's offset from the film centre as a fraction of the film (x to the right, y down), as in Mitsuba: the image shifts by that fraction |
+//! | `perspective` | `focus_distance` | float | length | > 0 | `far_clip` | accepted: Mitsuba's `perspective` is a pinhole, so it has no effect (it matters to `thinlens`, which is not supported) |
+//! | `independent`, `stratified`, `multijitter`, `orthogonal`, `ldsampler` | `sample_count` | integer | – | 1 … 2³²−1 | 4 | samples per pixel, rounded up as Mitsuba rounds it: `stratified` to a square, `multijitter` to `⌊√n⌋·⌈n/⌊√n⌋⌉`, `orthogonal` to the square of a prime, `ldsampler` to the square of a power of two (at least 4) |
+//! | `stratified`, `multijitter`, `orthogonal` | `jitter` | boolean | – | – | true | accepted; `orthogonal`'s `strength` too |
 //! | `perspective` | nested `medium` | – | – | at most one | none | the medium the camera sits in |
-//! | `independent` | `sample_count` | integer | – | 1 … 2³²−1 | 4 | samples per pixel |
-//! | `independent` | `seed` | integer | – | ≥ 0 | 0 | |
+//! | all samplers | `seed` | integer | – | ≥ 0 | 0 | |
+//!
+//! **Samplers.** Every sampler type renders with fgf's independent
+//! sampler: Mitsuba's stratified and low-discrepancy samplers change the
+//! noise, not the expected image, so the image agrees with Mitsuba's within
+//! the standard error at the same (rounded) sample count.
 //! | `hdrfilm` | `width`, `height` | integer | pixels | 1 … 65536, at most 2²⁶ pixels in all | 768, 576 | |
 //! | `hdrfilm` | `pixel_format` | string | – | `rgb`, `rgba` | `rgb` | the output is RGB either way |
 //! | `hdrfilm` | `component_format`, `file_format` | string | – | Mitsuba's | – | accepted and ignored: the output is float32 EXR; `crop_*` (cropping) is refused |
@@ -61,6 +69,19 @@ const FOCAL_LENGTH: Range<f64> = Range {
     ok: |v| v > 0.0,
     text: "> 0 mm, e.g. \"50mm\"",
 };
+/// Mitsuba's `focus_distance` (which a pinhole ignores).
+const FOCUS_DISTANCE: Range<f64> = Range {
+    ok: |v| v > 0.0,
+    text: "> 0",
+};
+/// Mitsuba's sampler plugins; all render as the independent sampler.
+const SAMPLERS: &[&str] = &[
+    "independent",
+    "stratified",
+    "multijitter",
+    "orthogonal",
+    "ldsampler",
+];
 /// The sampler's seed (the description holds it as a u64).
 const SEED: Range<i64> = Range {
     ok: |v| v >= 0,
@@ -86,6 +107,7 @@ pub(crate) fn default_sensor() -> SensorDesc {
         to_world: Mat4::IDENTITY,
         fov: fov_from_focal_length(50.0, width, height) as f32,
         fov_axis: FovAxis::X,
+        principal_point: [0.0, 0.0],
         near_clip: 0.01,
         far_clip: 10_000.0,
         width,
@@ -110,6 +132,9 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
             "near_clip",
             "far_clip",
             "to_world",
+            "principal_point_offset_x",
+            "principal_point_offset_y",
+            "focus_distance",
         ],
     )?;
     let mut s = default_sensor();
@@ -171,6 +196,14 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
     };
     s.near_clip = near as f32;
     s.far_clip = far as f32;
+    s.principal_point = [
+        p.float("principal_point_offset_x")?
+            .map_or(0.0, |(v, _)| v as f32),
+        p.float("principal_point_offset_y")?
+            .map_or(0.0, |(v, _)| v as f32),
+    ];
+    // A pinhole camera has no focus: accepted (and range-checked) only.
+    p.float_in("focus_distance", far, FOCUS_DISTANCE)?;
     if let Some((m, node)) = p.transform("to_world")? {
         // Mitsuba refuses scale in a camera transform.
         if !is_rigid(&m) {
@@ -191,11 +224,59 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
 
 fn sampler(ctx: &Ctx, n: &XNode, s: &mut SensorDesc) -> Result<(), SceneError> {
     check_object_attrs(n)?;
-    plugin_type(n, "sampler", &["independent"])?;
-    let p = Props::new(n, &ctx.ids, &["sample_count", "seed"])?;
-    s.spp = p.int_in("sample_count", 4, SAMPLE_COUNT)? as u32;
+    let ty = plugin_type(n, "sampler", SAMPLERS)?;
+    let known: &'static [&'static str] = match ty {
+        "stratified" | "multijitter" => &["sample_count", "seed", "jitter"],
+        "orthogonal" => &["sample_count", "seed", "jitter", "strength"],
+        _ => &["sample_count", "seed"],
+    };
+    let p = Props::new(n, &ctx.ids, known)?;
+    let spp = p.int_in("sample_count", 4, SAMPLE_COUNT)? as u64;
+    s.spp = rounded_sample_count(ty, spp).min(u32::MAX as u64) as u32;
     s.seed = p.int_in("seed", 0, SEED)? as u64;
+    p.bool_or("jitter", true)?;
+    if let Some((v, node)) = p.int("strength")? {
+        if v < 2 {
+            return Err(node.err(format!(
+                "parameter 'strength' = {v} is out of range (valid: >= 2)"
+            )));
+        }
+    }
     p.finish()
+}
+
+/// The sample count Mitsuba's sampler `ty` uses when asked for `n`.
+fn rounded_sample_count(ty: &str, n: u64) -> u64 {
+    match ty {
+        "stratified" => {
+            let mut r = 1u64;
+            while r * r < n {
+                r += 1;
+            }
+            r * r
+        }
+        "multijitter" => {
+            let r1 = ((n as f64).sqrt() as u64).max(1);
+            let r0 = n.div_ceil(r1);
+            r0 * r1
+        }
+        "orthogonal" => {
+            let is_prime = |p: u64| p >= 2 && (2..).take_while(|d| d * d <= p).all(|d| p % d != 0);
+            let mut r = 2u64;
+            while r * r < n || !is_prime(r) {
+                r += 1;
+            }
+            r * r
+        }
+        "ldsampler" => {
+            let mut r = 2u64;
+            while r * r < n {
+                r = (r + 1).next_power_of_two();
+            }
+            r * r
+        }
+        _ => n,
+    }
 }
 
 fn film(ctx: &Ctx, n: &XNode, s: &mut SensorDesc) -> Result<(), SceneError> {

@@ -1,7 +1,7 @@
 //! `<shape>`: `cube` (`[-1, 1]³` in local space), `rectangle` (`[-1, 1]²`
 //! in the local xy plane, normal +z), `disk` (the unit disk in the local xy
 //! plane, normal +z), `sphere`, and the triangle meshes `obj` and `ply`
-//! (read by `mesh/`). A shape is a medium boundary when it names an
+//! and Mitsuba's `serialized` (read by `mesh/`). A shape is a medium boundary when it names an
 //! `interior` or `exterior` medium (the exterior is on the normal's side).
 //!
 //! | plugin | parameter | type | units | range | default | meaning |
@@ -11,9 +11,11 @@
 //! | `sphere` | `center` | point | length | – | (0, 0, 0) | in local space |
 //! | `sphere` | `radius` | float | length | > 0 | 1 | in local space |
 //! | `obj`, `ply` | `filename` | string | – | a file, relative to the scene file | required | OBJ (any groups, merged) or PLY (ascii or binary; n-gons fan-triangulated) |
-//! | `obj`, `ply` | `face_normals` | boolean | – | – | false | flat shading: the file's normals are ignored and none are computed (see below) |
+//! | `obj`, `ply`, `serialized` | `face_normals` | boolean | – | – | false | flat shading: the file's normals are ignored and none are computed (see below); a `serialized` mesh flagged for face normals is flat too |
+//! | `serialized` | `filename` | string | – | a Mitsuba `.serialized` file (format versions 3 and 4), found like every file (see [`super`]) | required | |
+//! | `serialized` | `shape_index` | integer | – | 0 … meshes in the file − 1 | 0 | which mesh of the file |
 //! | all | nested `bsdf` | – | – | one, or a `<ref>` | diffuse 0.5; diffuse 0 on a shape with an area emitter | see below |
-//! | all | nested `emitter` | – | – | one `area` emitter | none | see [`super::emitters`] |
+//! | all | nested `emitter` | – | – | one `area` emitter, nested or a `<ref>` to one declared at the top level with an `id` (used by one shape only) | none | see [`super::emitters`] |
 //! | all | nested `medium` | – | – | `name="interior"` and/or `name="exterior"` | none | see [`super::media`] |
 //!
 //! ```xml
@@ -77,7 +79,20 @@ use crate::validate::{is_similarity, NOT_SIMILARITY, SPHERE_RADIUS};
 use glam::{DVec3, Mat4};
 use std::sync::Arc;
 
-const SHAPES: &[&str] = &["cube", "rectangle", "disk", "sphere", "obj", "ply"];
+const SHAPES: &[&str] = &[
+    "cube",
+    "rectangle",
+    "disk",
+    "sphere",
+    "obj",
+    "ply",
+    "serialized",
+];
+/// Mitsuba's `shape_index` of a `serialized` file.
+const SHAPE_INDEX: crate::validate::Range<i64> = crate::validate::Range {
+    ok: |v| (0..=u32::MAX as i64).contains(&v),
+    text: ">= 0",
+};
 
 pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDesc, SceneError> {
     check_object_attrs(n)?;
@@ -85,6 +100,13 @@ pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDes
     let known: &'static [&'static str] = match ty {
         "sphere" => &["to_world", "flip_normals", "center", "radius"],
         "obj" | "ply" => &["to_world", "flip_normals", "filename", "face_normals"],
+        "serialized" => &[
+            "to_world",
+            "flip_normals",
+            "filename",
+            "face_normals",
+            "shape_index",
+        ],
         _ => &["to_world", "flip_normals"],
     };
     let p = Props::new(n, &ctx.ids, known)?;
@@ -122,12 +144,17 @@ pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDes
             let (file, fnode) = p.string("filename")?.ok_or_else(|| {
                 n.err("missing required parameter 'filename' (the mesh file, relative to the scene file)")
             })?;
-            let face_normals = p.bool_or("face_normals", false)?;
+            let mut face_normals = p.bool_or("face_normals", false)?;
             let path = fnode.resolve(file);
-            let mut m = if ty == "obj" {
-                mesh::load_obj(fnode, &path)?
-            } else {
-                mesh::load_ply(fnode, &path)?
+            let mut m = match ty {
+                "obj" => mesh::load_obj(fnode, &path)?,
+                "ply" => mesh::load_ply(fnode, &path)?,
+                _ => {
+                    let index = p.int_in("shape_index", 0, SHAPE_INDEX)? as u32;
+                    let s = mesh::load_serialized(fnode, &path, index)?;
+                    face_normals |= s.face_normals;
+                    s.mesh
+                }
             };
             if face_normals {
                 m.normals = None;
@@ -160,9 +187,16 @@ pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDes
     let emitter = match emitters.first() {
         Some(e) => {
             if e.node.tag == "ref" {
-                return Err(e
-                    .node
-                    .err("an area emitter must be nested in its shape, not referenced"));
+                // An area emitter declared at the top level with an id.
+                if let Some(id) = e.target.attr("id") {
+                    if let Some(prev) = ctx.area_refs.insert(id.to_string(), n) {
+                        return Err(e.node.err(format!(
+                            "area emitter '{id}' is already attached to the shape at {}:{} (an emitter belongs to one shape)",
+                            prev.file.display(),
+                            prev.line
+                        )));
+                    }
+                }
             }
             Some(emitters::emitter_desc(ctx, e.target, true)?)
         }

@@ -12,8 +12,9 @@
 //! | `gridvolume` | `to_world` | transform | – | invertible | identity | volume space to world |
 //! | `gridvolume` | `use_grid_bbox` | boolean | – | – | false | false: the grid spans the unit cube `[0, 1]³` of volume space; true: the bounding box in the file (which must not be empty) |
 //! | `gridvolume` | `filter_type` | string | – | `trilinear`, `nearest` | `trilinear` | interpolation between voxel centres |
-//! | `gridvolume` | `wrap_mode` | string | – | `clamp` | `clamp` | the other Mitsuba modes are not supported |
+//! | `gridvolume` | `wrap_mode` | string | – | `clamp`; `mirror` for `sigma_t` and `density` | `clamp` | lookups outside `[0, 1]³`; inside the box (all a `sigma_t` or `density` grid is looked up at) `mirror` gives the same values as `clamp`; `repeat` is not supported |
 //! | `constvolume` | `value` | float or rgb | that of the parameter | that of the parameter | 1 | |
+//! | `constvolume` | `to_world` | transform | – | invertible | identity | places the volume's unit cube `[0, 1]³`: the bounding box of a `heterogeneous` medium with a constant `sigma_t` (see [`super::media`]); it has no effect elsewhere |
 //!
 //! **OpenVDB files (an fgf extension; Mitsuba 3 reads only `.vol`).** A
 //! `filename` ending in `.vdb` loads the float grid named `grid` densely over
@@ -81,16 +82,62 @@ fn volume(ctx: &Ctx, n: &XNode, name: &str, r: Range<f64>) -> Result<VolumeDesc,
     let ty = n.attr("type").unwrap_or("");
     match ty {
         "constvolume" => {
-            let p = Props::new(n, &ctx.ids, &["value"])?;
+            let p = Props::new(n, &ctx.ids, &["value", "to_world"])?;
             let c = p.color_in("value", [1.0; 3], r)?;
+            let to_world = match p.transform("to_world")? {
+                Some((m, node)) => to_invertible_mat4(node, m)?,
+                None => Mat4::IDENTITY,
+            };
             p.finish()?;
-            Ok(VolumeDesc::Constant(rgb(c)))
+            if to_world == Mat4::IDENTITY {
+                Ok(VolumeDesc::Constant(rgb(c)))
+            } else {
+                Ok(VolumeDesc::Grid(constant_grid(rgb(c), to_world)))
+            }
         }
         "gridvolume" => Ok(VolumeDesc::Grid(gridvolume(ctx, n, name, r)?)),
         _ => Err(n.err(format!(
             "unknown volume type '{ty}' (supported: gridvolume, constvolume)"
         ))),
     }
+}
+
+/// A constant volume over the unit cube mapped by `to_world`: a one-voxel
+/// grid, which every lookup (clamped) returns.
+pub(crate) fn constant_grid(c: Rgb, to_world: Mat4) -> GridVolumeDesc {
+    GridVolumeDesc {
+        grid: Arc::new(fgf_io::vol::VolGrid {
+            shape: [1, 1, 1],
+            channels: 3,
+            bbox: [0.0, 0.0, 0.0, 1.0, 1.0, 1.0],
+            data: c.to_vec(),
+        }),
+        to_world,
+        use_grid_bbox: false,
+        filter: GridFilter::Nearest,
+        wrap_clamp: true,
+    }
+}
+
+/// Half the side of the box that stands for all of space (a medium that
+/// Mitsuba leaves unbounded): far beyond any scene in single precision,
+/// and any ray through that much of a medium is extinguished.
+const EVERYWHERE: f32 = 1.0e6;
+
+/// A `to_world` that maps the unit cube onto `[-EVERYWHERE, EVERYWHERE]³`.
+pub(crate) fn everywhere() -> Mat4 {
+    Mat4::from_translation(glam::Vec3::splat(-EVERYWHERE))
+        * Mat4::from_scale(glam::Vec3::splat(2.0 * EVERYWHERE))
+}
+
+/// The value of a constant volume given as a one-voxel grid (a
+/// `constvolume` with a `to_world`), which is the same everywhere.
+pub(crate) fn constant_value(g: &GridVolumeDesc) -> Option<Rgb> {
+    let d = &g.grid;
+    (d.shape == [1, 1, 1]).then(|| match d.channels {
+        1 => [d.data[0]; 3],
+        _ => [d.data[0], d.data[1], d.data[2]],
+    })
 }
 
 pub(crate) fn gridvolume(
@@ -221,8 +268,19 @@ pub(crate) fn gridvolume(
         }
     }
     if let Some((w, node)) = p.string("wrap_mode")? {
-        if w != "clamp" {
-            return Err(node.err(format!("wrap_mode '{w}' is not supported (valid: clamp)")));
+        // Only lookups outside [0, 1]^3 tell mirror from clamp, and a
+        // sigma_t or density grid is looked up inside its box only.
+        let inside_only = matches!(name, "sigma_t" | "density");
+        let ok = w == "clamp" || (w == "mirror" && inside_only);
+        if !ok {
+            let valid = if inside_only {
+                "clamp, mirror"
+            } else {
+                "clamp"
+            };
+            return Err(node.err(format!(
+                "wrap_mode '{w}' is not supported for '{name}' (valid: {valid})"
+            )));
         }
     }
     p.finish()?;

@@ -55,6 +55,7 @@ pub fn minimal_scene() -> fgf_scene::SceneDesc {
             to_world: glam::Mat4::IDENTITY,
             fov: 45.0,
             fov_axis: FovAxis::X,
+            principal_point: [0.0, 0.0],
             near_clip: 0.01,
             far_clip: 100.0,
             width: 32,

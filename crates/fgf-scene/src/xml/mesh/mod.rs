@@ -11,6 +11,9 @@
 //!   (`vertex_indices` or `vertex_index` lists; n-gons fan-triangulated);
 //!   other elements and properties are skipped.
 //!
+//! * Mitsuba's `serialized` ([`serialized`]): versions 3 and 4, zlib streams
+//!   read with `flate2`, any mesh of the file by `shape_index`.
+//!
 //! Normals are kept only if every vertex has one; they are normalised.
 //!
 //! Meshes without vertex normals get Mitsuba's smooth ones from
@@ -24,9 +27,11 @@
 
 mod obj;
 mod ply;
+mod serialized;
 
 pub(crate) use obj::load_obj;
 pub(crate) use ply::load_ply;
+pub(crate) use serialized::load_serialized;
 
 use super::document::XNode;
 use crate::desc::TriangleMesh;
