@@ -48,10 +48,9 @@ SCENES: list[tuple[str, str | None]] = [
     (f"{MD}/docs/scenes/sampler_multijitter_16spp.xml", "checkerboard"),
     (f"{MD}/docs/scenes/sampler_orthogonal_25spp.xml", "checkerboard"),
     (f"{MD}/docs/scenes/sampler_ldsampler_16spp.xml", "checkerboard"),
-    (f"{MD}/docs/scenes/medium_homogeneous_sss.xml", "roughdielectric"),
-    (f"{MD}/scenes/matpreview/matpreview.xml", "envmap"),
-    (f"{MD}/tests/scenes/participating_media/test_homo_emitter_inside_medium_volpath.xml", "envmap"),
-    (f"{MD}/tests/scenes/participating_media/test_hetero_sigmat_volpath.xml", "envmap"),
+    (f"{MD}/scenes/matpreview/matpreview.xml", None),
+    (f"{MD}/tests/scenes/participating_media/test_homo_emitter_inside_medium_volpath.xml", None),
+    (f"{MD}/tests/scenes/participating_media/test_hetero_sigmat_volpath.xml", None),
     (f"{MD}/tests/scenes/participating_media/test_homo_area_light_volpath.xml", "checkerboard"),
 ]
 
@@ -66,14 +65,14 @@ DERIVED: list[tuple[str, str | None]] = [
     (f"{PM}/test_hetero_sigmat_volpath.xml", None),
     (f"{PM}/test_hetero_spectral_sigmat_no_scattering_volpath.xml", None),
     (f"{PM}/test_hetero_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_homo_area_light_volpath.xml", "thindielectric"),
+    (f"{PM}/test_homo_area_light_volpath.xml", None),
     (f"{PM}/test_homo_dielectric_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", "thindielectric"),
+    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", None),
     (f"{PM}/test_homo_null_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", "thindielectric"),
-    (f"{PM}/test_homo_roughdielectric_spot_volpath.xml", "roughdielectric"),
+    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", None),
+    (f"{PM}/test_homo_roughdielectric_spot_volpath.xml", None),
     (f"{PM}/test_homo_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_surf_area_light_volpath.xml", "plastic"),
+    (f"{PM}/test_surf_area_light_volpath.xml", None),
 ]
 ENVMAP = re.compile(r"<emitter\s+type=[\"']envmap[\"'][^>]*>.*?</emitter>", re.S)
 CHECKER = re.compile(r"<texture\s+type=[\"']checkerboard[\"']\s+name=[\"'](\w+)[\"'][^>]*>.*?</texture>", re.S)

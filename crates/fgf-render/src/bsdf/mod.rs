@@ -226,6 +226,14 @@ impl Bsdf {
         matches!(self.kind, BsdfKind::Null)
     }
 
+    /// `thindielectric`: its transmission leaves the direction unchanged, so
+    /// the path tracer counts it as an index-matched crossing (no depth), as
+    /// Mitsuba 3's volpath counts its `Null` lobe.
+    #[inline]
+    pub fn is_thin(&self) -> bool {
+        matches!(self.kind, BsdfKind::ThinDielectric { .. })
+    }
+
     /// True if the BSDF has a non-delta lobe, so light sampling helps.
     #[inline]
     pub fn is_smooth(&self) -> bool {

@@ -20,7 +20,7 @@
 
 use super::direct::{Scatterer, SurfaceVertex};
 use crate::emitter::Emitter;
-use crate::math::{mis_power, Frame, Sampler, UNIFORM_SPHERE_PDF};
+use crate::math::{mis_power, Frame, Sampler};
 use crate::ray::{offset_point, Ray};
 use crate::spectrum::Spectrum;
 use crate::world::World;
@@ -68,7 +68,7 @@ impl World {
             break h;
         };
         let info = self.shapes[h.shape as usize];
-        let bsdf = self.bsdfs[info.bsdf as usize];
+        let bsdf = &self.bsdfs[info.bsdf as usize];
         let total = (n_e + n_b) as f32;
         let (c_e, c_b) = (n_e as f32 / total, n_b as f32 / total);
         let frame = Frame::from_normal(h.ns);
@@ -77,7 +77,7 @@ impl World {
             let vertex = SurfaceVertex {
                 hit: &h,
                 info: &info,
-                bsdf: &bsdf,
+                bsdf,
                 frame: &frame,
                 wi_local,
                 medium: None,
@@ -119,11 +119,12 @@ impl World {
             };
             // The emission the sampled direction finds, and its light pdf.
             let (le, light_pdf) = match self.geom.intersect(&r, f32::INFINITY) {
-                None => match self.env.map(|e| self.emitters[e as usize]) {
-                    Some(Emitter::Constant { radiance }) => {
-                        (radiance, UNIFORM_SPHERE_PDF * self.select_pdf())
-                    }
-                    _ => continue,
+                None => match self
+                    .env
+                    .and_then(|e| self.emitters[e as usize].environment(wo))
+                {
+                    Some((radiance, env_pdf)) => (radiance, env_pdf * self.select_pdf()),
+                    None => continue,
                 },
                 Some(h2) => {
                     let Some(e) = self.shapes[h2.shape as usize].emitter else {

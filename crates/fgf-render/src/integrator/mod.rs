@@ -202,7 +202,9 @@ impl World {
             }
             // This interaction would be event number depth + 1: nothing it
             // leads to can contribute unless depth + 1 < max_depth.
-            if depth + 1 >= self.max_depth {
+            // A thin dielectric's transmission does not count (see below),
+            // so its sample is drawn first and the test made after it.
+            if depth + 1 >= self.max_depth && !bsdf.is_thin() {
                 break;
             }
             let frame = Frame::from_normal(h.ns);
@@ -224,10 +226,19 @@ impl World {
             let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
                 break;
             };
+            // Transmission through a thin dielectric keeps the direction: an
+            // index-matched crossing, not a scattering event (Mitsuba's
+            // volpath gives it no depth either).
+            let crossing = bsdf.is_thin() && bs.wo.z * wi_local.z < 0.0;
+            if !crossing && depth + 1 >= self.max_depth {
+                break;
+            }
             let wo = frame.to_world(bs.wo);
             thr *= bs.weight;
             eta *= bs.eta;
-            depth += 1;
+            if !crossing {
+                depth += 1;
+            }
             specular = bs.delta;
             prev_pdf = bs.pdf;
             prev_p = h.p;
