@@ -13,8 +13,11 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
 
-from ._scene_args import add_scene_options, check_scene_options
+from .._atomic import StagedOutputs
+
+from ._scene_args import add_scene_options, check_scene_options, stage_outputs
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -38,6 +41,13 @@ def run(args: argparse.Namespace) -> int:
 
     out, png = check_scene_options(args, {"--variance": args.variance})
     defines = _defines_list(args.defines)
+    with stage_outputs([("-o", out), ("--png", png), ("--variance", args.variance)]) as staged:
+        return _render(args, out, png, defines, staged)
+
+
+def _render(args: argparse.Namespace, out: Path, png: Path, defines: list[tuple[str, str]], staged: StagedOutputs) -> int:
+    from .. import _core
+
     t0 = time.perf_counter()
     img, var, done, interrupted = _core.render_scene(
         args.scene,
@@ -52,10 +62,11 @@ def run(args: argparse.Namespace) -> int:
     if done == 0:
         print("fgf render: interrupted before the first pass finished; nothing written", file=sys.stderr)
         return 130
-    _core.write_exr(str(out), img)
-    _core.write_png(str(png), img, args.exposure)
+    _core.write_exr(staged["-o"], img)
+    _core.write_png(staged["--png"], img, args.exposure)
     if var is not None:
-        _core.write_exr(args.variance, var)
+        _core.write_exr(staged["--variance"], var)
+    staged.commit()
     written = ", ".join(str(p) for p in [out, png] + ([args.variance] if var is not None else []))
     h, w = img.shape[:2]
     if interrupted:
