@@ -59,8 +59,11 @@ pub(crate) fn load_scene(
     defines: Option<Vec<(String, String)>>,
 ) -> PyResult<fgf_scene::SceneDesc> {
     let defines = defines.unwrap_or_default();
-    py.detach(|| fgf_scene::load_file(scene, &defines))
-        .map_err(scene_err)
+    let scene = scene.to_path_buf();
+    crate::progress::run_interruptible(py, move |cancel| {
+        fgf_scene::load_file_cancellable(&scene, &defines, Some(cancel))
+    })?
+    .map_err(scene_err)
 }
 
 /// Run `go` on a local rayon pool of `threads` workers (all cores if

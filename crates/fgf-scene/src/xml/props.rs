@@ -90,7 +90,8 @@ impl<'a> Entry<'a> {
         let s = self.value_attr()?;
         s.trim().parse::<i64>().map_err(|_| {
             self.node.err(format!(
-                "cannot parse '{s}' as an integer for parameter '{}'",
+                "cannot parse '{}' as an integer for parameter '{}'",
+                crate::error::clip(s),
                 self.name.unwrap_or("?")
             ))
         })
@@ -105,7 +106,8 @@ impl<'a> Entry<'a> {
             "true" => Ok(true),
             "false" => Ok(false),
             _ => Err(self.node.err(format!(
-                "cannot parse '{s}' as a boolean for parameter '{}' (valid: true, false)",
+                "cannot parse '{}' as a boolean for parameter '{}' (valid: true, false)",
+                crate::error::clip(s),
                 self.name.unwrap_or("?")
             ))),
         }
@@ -385,7 +387,8 @@ impl<'a> Props<'a> {
                     Ok(v.to_string())
                 } else {
                     Err(node.err(format!(
-                        "invalid {name} = '{v}' (valid: {})",
+                        "invalid {name} = '{}' (valid: {})",
+                        crate::error::clip(v),
                         choices.join(", ")
                     )))
                 }
