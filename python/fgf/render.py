@@ -16,6 +16,7 @@ Images are linear RGB, row 0 at the top.
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any, Literal, Mapping, Sequence, Union, cast, overload
 
@@ -23,7 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _core
-from ._progress import Progress, check_seed, progress_sink
+from ._progress import MAX_THREADS, U32_MAX, Progress, check_int, check_seed, progress_sink
 
 __all__ = ["render", "write_exr", "write_png"]
 
@@ -135,9 +136,9 @@ def render(
     with progress_sink(progress, "render") as sink:
         img, var, done, interrupted = _core.render_scene(
             os.fspath(scene),
-            spp=spp,
+            spp=None if spp is None else check_int("spp", spp, 1, U32_MAX),
             seed=None if seed is None else check_seed(seed),
-            threads=threads,
+            threads=None if threads is None else check_int("threads", threads, 1, MAX_THREADS),
             defines=_defines_list(defines),
             progress=sink,
             return_variance=return_variance,
@@ -163,4 +164,7 @@ def write_exr(path: str | os.PathLike[str], img: npt.ArrayLike) -> None:
 def write_png(path: str | os.PathLike[str], img: npt.ArrayLike, exposure: float = 0.0) -> None:
     """Write an ``(H, W, 3)`` linear image as an 8-bit sRGB PNG preview
     (exposure in stops, then clamp, then the sRGB curve), atomically."""
-    _core.write_png(os.fspath(path), _as_image(img), float(exposure))
+    stops = float(exposure)
+    if not math.isfinite(stops):
+        raise _core.ParameterError(f"invalid exposure = {exposure!r}: must be a finite number of stops")
+    _core.write_png(os.fspath(path), _as_image(img), stops)

@@ -159,6 +159,11 @@ fn write_png(
     img: PyReadonlyArray3<'_, f32>,
     exposure: f32,
 ) -> PyResult<()> {
+    if !exposure.is_finite() {
+        return Err(ParameterError::new_err(format!(
+            "invalid exposure = {exposure}: must be a finite number of stops (|exposure| < 3.4e38)"
+        )));
+    }
     let (h, w, data) = image_data(&img)?;
     py.detach(|| fgf_io::image::write_png_preview(&path, w, h, 3, &data, exposure))
         .map_err(io_err)
