@@ -113,7 +113,10 @@ def render(
         is quiet; an object with ``update(n)`` gets the samples finished; a
         callable is called as ``progress(done, total)``.
     return_variance : bool
-        Also return the per-pixel variance of the pixel mean.
+        Also return the per-pixel variance of the pixel mean (the sample
+        variance over the pixel's samples divided by their count). It needs
+        at least 2 samples per pixel: with 1 it is undefined, and
+        :class:`fgf.ParameterError` is raised instead of returning NaN.
 
     Returns
     -------
@@ -145,6 +148,10 @@ def render(
         )
     if interrupted:
         raise KeyboardInterrupt(f"render interrupted after {done} samples per pixel")
+    if return_variance and done < 2:
+        raise _core.ParameterError(
+            f"spp = {done}: the per-pixel variance needs at least 2 samples per pixel (undefined for 1)"
+        )
     # The native call returns a variance exactly when asked for one.
     return (img, cast(Image, var)) if return_variance else img
 

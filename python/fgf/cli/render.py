@@ -40,6 +40,10 @@ def run(args: argparse.Namespace) -> int:
     from ..render import _defines_list
 
     out, png = check_scene_options(args, {"--variance": args.variance})
+    if args.variance is not None and args.spp is not None and args.spp < 2:
+        from .. import ParameterError
+
+        raise ParameterError(f"--spp {args.spp} with --variance: the per-pixel variance needs at least 2 samples per pixel")
     defines = _defines_list(args.defines)
     with stage_outputs([("-o", out), ("--png", png), ("--variance", args.variance)]) as staged:
         return _render(args, out, png, defines, staged)
@@ -59,6 +63,14 @@ def _render(args: argparse.Namespace, out: Path, png: Path, defines: list[tuple[
         return_variance=args.variance is not None,
     )
     elapsed = time.perf_counter() - t0
+    if var is not None and done < 2:
+        # The variance of a 1-sample mean is undefined (NaN): write nothing.
+        print(
+            f"fgf render: error: --variance needs at least 2 samples per pixel; {done} "
+            f"{'were done before the interrupt' if interrupted else 'were rendered'}; nothing written",
+            file=sys.stderr,
+        )
+        return 130 if interrupted else 2
     if done == 0:
         print("fgf render: interrupted before the first pass finished; nothing written", file=sys.stderr)
         return 130
