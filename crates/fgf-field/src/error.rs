@@ -50,7 +50,9 @@ pub fn mem_available() -> Option<u64> {
 /// minus its current virtual size; `None` when unlimited or unknown.
 fn address_space_left() -> Option<u64> {
     let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
-    let line = limits.lines().find(|l| l.starts_with("Max address space"))?;
+    let line = limits
+        .lines()
+        .find(|l| l.starts_with("Max address space"))?;
     let soft: u64 = line.split_whitespace().nth(3)?.parse().ok()?;
     let status = std::fs::read_to_string("/proc/self/status").ok()?;
     let vm = status.lines().find(|l| l.starts_with("VmSize:"))?;

@@ -234,9 +234,7 @@ where
         .spawn(move || {
             let _ = tx.send(job(&flag));
         })
-        .map_err(|e| {
-            pyo3::exceptions::PyOSError::new_err(format!("cannot start a thread: {e}"))
-        })?;
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("cannot start a thread: {e}")))?;
     let mut rx = rx;
     loop {
         let (got, back) = py.detach(move || (rx.recv_timeout(Duration::from_millis(50)), rx));

@@ -129,7 +129,7 @@ def harden(parser: argparse.ArgumentParser) -> None:
     """Give every option of ``parser`` and of its subcommands a checked type."""
     for action in parser._actions:
         if isinstance(action, argparse._SubParsersAction):
-            choices: dict[str, Any] = action.choices  # type: ignore[assignment]
+            choices: dict[str, Any] = action.choices
             for sub in choices.values():
                 harden(sub)
         elif isinstance(action, (argparse._StoreAction, argparse._AppendAction)):

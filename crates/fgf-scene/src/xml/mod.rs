@@ -121,7 +121,13 @@ pub fn load_file_cancellable(
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => std::path::PathBuf::from("."),
     };
-    load_str_cancellable(&text, &path.display().to_string(), &base_dir, defines, cancel)
+    load_str_cancellable(
+        &text,
+        &path.display().to_string(),
+        &base_dir,
+        defines,
+        cancel,
+    )
 }
 
 /// Load a scene from a string. `source_name` names it in messages and
