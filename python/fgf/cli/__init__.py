@@ -47,8 +47,16 @@ def main(argv: list[str] | None = None) -> int:
         # native module polls for it during long jobs.
         if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
             signal.signal(signal.SIGINT, signal.default_int_handler)
+        from ._args import OptionError
+
         parser = build_parser()
-        args = parser.parse_args(argv)
+        try:
+            args = parser.parse_args(argv)
+        except OptionError as e:
+            words = sys.argv[1:] if argv is None else argv
+            sub = next((w for w in words if w in COMMANDS), None)
+            print(f"fgf{' ' + sub if sub else ''}: error: {e}", file=sys.stderr)
+            return 2
         command = f"fgf {args.command}"
         from .. import FgfError
 

@@ -40,6 +40,16 @@ INT_RANGES: dict[str, tuple[int, int]] = {
 PATH_OPTIONS = ("-o", "--output", "--png", "--variance", "--stderr", "--out", "--scene-dir", "--checkpoint")
 
 
+class OptionError(Exception):
+    """A bad option value: :func:`fgf.cli.main` prints it as one line, exit 2.
+
+    Deliberately not a ``ValueError``: argparse would turn that into a
+    usage message and drop the reason."""
+
+    def __init__(self, option: str, message: str) -> None:
+        super().__init__(f"argument {option}: {message}")
+
+
 def echo(value: str, limit: int = ECHO_MAX) -> str:
     """``repr(value)``, cut to ``limit`` characters with the length said."""
     if len(value) <= limit:
@@ -55,10 +65,11 @@ def int_in(lo: int, hi: int) -> Callable[[str], int]:
             # int() itself refuses more than 4300 digits with a ValueError.
             v = int(text.strip(), 10)
         except ValueError:
+            # Not a number at all: argparse's usage message (it is a typo).
             raise argparse.ArgumentTypeError(f"invalid integer {echo(text)} (valid: {lo} to {hi})") from None
         if not lo <= v <= hi:
             shown = str(v) if len(str(v)) <= 24 else f"a {len(str(abs(v)))}-digit integer"
-            raise argparse.ArgumentTypeError(f"{shown} is out of range (valid: {lo} to {hi})")
+            raise _Bad(f"{shown} is out of range (valid: {lo} to {hi})")
         return v
 
     parse.__name__ = "integer"
@@ -80,16 +91,16 @@ def _encodable(text: str, what: str) -> str:
     try:
         text.encode("utf-8")
     except UnicodeEncodeError:
-        raise argparse.ArgumentTypeError(f"{what} {echo(text)} is not valid UTF-8") from None
+        raise _Bad(f"{what} {echo(text)} is not valid UTF-8") from None
     if "\0" in text:
-        raise argparse.ArgumentTypeError(f"{what} {echo(text)} contains a NUL character")
+        raise _Bad(f"{what} {echo(text)} contains a NUL character")
     return text
 
 
 def path(text: str) -> str:
     """An argparse type: a non-empty, UTF-8 file name."""
     if not text:
-        raise argparse.ArgumentTypeError("empty file name")
+        raise _Bad("empty file name")
     return _encodable(text, "file name")
 
 
@@ -101,14 +112,37 @@ def define(text: str) -> str:
     _encodable(text, "-D value")
     name, sep, _ = text.partition("=")
     if not sep or not name:
-        raise argparse.ArgumentTypeError(f"{echo(text)}: expected NAME=VALUE")
+        raise _Bad(f"define {echo(text)}: expected name=value")
     return text
 
 
 define.__name__ = "define"
 
 
+class _Bad(Exception):
+    """Raised by the types below; :func:`_named` adds the option name."""
+
+
+def _named(action: argparse.Action, parse: Callable[[str], Any]) -> Callable[[str], Any]:
+    option = "/".join(action.option_strings) or action.dest
+
+    def typed(text: str) -> Any:
+        try:
+            return parse(text)
+        except _Bad as e:
+            raise OptionError(option, str(e)) from None
+
+    typed.__name__ = getattr(parse, "__name__", "value")
+    return typed
+
+
 def _retype(action: argparse.Action) -> None:
+    _retype_plain(action)
+    if callable(action.type) and not isinstance(action.type, type):
+        action.type = _named(action, action.type)
+
+
+def _retype_plain(action: argparse.Action) -> None:
     opts = action.option_strings
     if action.type is int:
         lo, hi = next((INT_RANGES[o] for o in opts if o in INT_RANGES), (I64_MIN, I64_MAX))
