@@ -19,3 +19,5 @@ bash scripts/wheel_smoke.sh
 echo "== slow statistical tests"
 cargo test --workspace --exclude fgf-py --release -- --ignored
 python -m pytest -q -m slow
+echo "== fuzz: coverage-guided parsers (XML + includes/defaults, .vol, OBJ, PLY), 60 s each"
+bash scripts/fuzz.sh 60

@@ -16,6 +16,36 @@ Areas:
   and :func:`pbrt_uniformgrid` (pbrt-v4).
 """
 
+import sys as _sys
+
+
+def _cli_sigint_guard() -> None:
+    """When run as the ``fgf`` command, make Ctrl-C during the imports below
+    (numpy, the native module: the first fraction of a second) exit with
+    code 130 and one line instead of a ``KeyboardInterrupt`` traceback.
+    ``fgf.cli.main`` replaces this handler once it can catch the interrupt."""
+    import os
+    import signal
+
+    argv0 = os.path.basename(_sys.argv[0]) if _sys.argv else ""
+    orig = getattr(_sys, "orig_argv", [])
+    as_module = argv0 == "-m" and any(
+        a == "-m" and i + 1 < len(orig) and orig[i + 1].split(".")[0] == "fgf" for i, a in enumerate(orig)
+    )
+    if argv0 not in ("fgf", "fgf.exe") and not as_module:
+        return
+    if signal.getsignal(signal.SIGINT) is not signal.default_int_handler:
+        return
+
+    def interrupted(signum: int, frame: object) -> None:
+        os.write(2, b"fgf: interrupted\n")
+        os._exit(130)
+
+    signal.signal(signal.SIGINT, interrupted)
+
+
+_cli_sigint_guard()
+
 from ._core import FgfError, ParameterError, SceneError, __version__
 
 __all__ = ["FgfError", "ParameterError", "SceneError", "__version__"]

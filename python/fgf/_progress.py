@@ -78,6 +78,9 @@ def check_int(name: str, value: object, lo: int, hi: int) -> int:
 
 
 SEED_MAX = 2**64 - 1
+U32_MAX = 2**32 - 1
+#: Most worker threads a call may ask for.
+MAX_THREADS = 4096
 
 
 def check_seed(seed: object) -> int:

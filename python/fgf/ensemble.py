@@ -37,6 +37,11 @@ import numpy.typing as npt
 
 from . import _core
 
+#: Most voxels along a medium's longest side that :func:`ensemble` accepts
+#: (a larger grid could not fit in memory; the bound keeps the voxel count's
+#: arithmetic far from overflow).
+MAX_RESOLUTION = 65536
+
 if TYPE_CHECKING:
     from ._progress import Progress
     from .render import Defines
@@ -188,7 +193,7 @@ def ensemble(
     KeyboardInterrupt
         On Ctrl-C, after the samples in flight finish.
     """
-    from ._progress import check_seed, progress_sink
+    from ._progress import MAX_THREADS, U32_MAX, check_int, check_seed, progress_sink
     from .render import _defines_list
 
     if client is not None or checkpoint is not None:
@@ -218,11 +223,11 @@ def ensemble(
     with progress_sink(progress, "ensemble") as sink:
         mean, stderr, info, interrupted = _core.ensemble_scene(
             os.fspath(scene),
-            int(realizations),
-            resolution=resolution,
-            spp=spp,
+            check_int("realizations", realizations, 1, U32_MAX),
+            resolution=None if resolution is None else check_int("resolution", resolution, 2, MAX_RESOLUTION),
+            spp=None if spp is None else check_int("spp", spp, 1, U32_MAX),
             seed=check_seed(seed),
-            threads=threads,
+            threads=None if threads is None else check_int("threads", threads, 1, MAX_THREADS),
             defines=_defines_list(defines),
             progress=sink,
             padding=None if padding is None else float(padding),

@@ -306,6 +306,20 @@ def _array(field: npt.ArrayLike) -> FloatField:
     return np.ascontiguousarray(a)
 
 
+#: Most bins :func:`radial_power_spectrum` accepts (fgf-field's ``MAX_BINS``).
+MAX_BINS = 1 << 20
+
+
+def _axis(a: npt.NDArray[Any], axis: object) -> int:
+    """``axis`` in ``[-ndim, ndim)``, as an index in ``[0, ndim)``; never wrapped."""
+    return check_int("axis", axis, -a.ndim, a.ndim - 1) % a.ndim
+
+
+def _max_lag(a: npt.NDArray[Any], axis: int, max_lag: object) -> int:
+    n = a.shape[axis]
+    return n // 2 if max_lag is None else check_int("max_lag", max_lag, 0, max(n - 1, 0))
+
+
 def variogram(field: npt.ArrayLike, axis: int = -1, max_lag: int | None = None) -> npt.NDArray[np.float64]:
     """Empirical variogram ``gamma(h) = 1/2 mean (f(x + h) - f(x))^2`` along an axis.
 
@@ -319,9 +333,8 @@ def variogram(field: npt.ArrayLike, axis: int = -1, max_lag: int | None = None) 
     [0.0, 0.5, 2.0]
     """
     a = _array(field)
-    axis = axis % a.ndim
-    lag = a.shape[axis] // 2 if max_lag is None else int(max_lag)
-    return np.asarray(_core.variogram(a, axis, lag))
+    axis = _axis(a, axis)
+    return np.asarray(_core.variogram(a, axis, _max_lag(a, axis, max_lag)))
 
 
 def covariance(field: npt.ArrayLike, axis: int = -1, max_lag: int | None = None) -> npt.NDArray[np.float64]:
@@ -331,9 +344,8 @@ def covariance(field: npt.ArrayLike, axis: int = -1, max_lag: int | None = None)
     (default: half the axis), non-periodic.
     """
     a = _array(field)
-    axis = axis % a.ndim
-    lag = a.shape[axis] // 2 if max_lag is None else int(max_lag)
-    return np.asarray(_core.covariance(a, axis, lag))
+    axis = _axis(a, axis)
+    return np.asarray(_core.covariance(a, axis, _max_lag(a, axis, max_lag)))
 
 
 def radial_power_spectrum(
@@ -351,7 +363,8 @@ def radial_power_spectrum(
         Mean ``|k|`` (rad per unit), mean periodogram and number of modes
         in each non-empty bin.
     """
-    k, p, c = _core.radial_power_spectrum(_array(field), float(spacing), int(n_bins))
+    bins = check_int("n_bins", n_bins, 1, MAX_BINS)
+    k, p, c = _core.radial_power_spectrum(_array(field), float(spacing), bins)
     return np.asarray(k), np.asarray(p), np.asarray(c)
 
 
@@ -363,7 +376,10 @@ def line_average_second_moment(field: npt.ArrayLike, lengths: Sequence[int], axi
     field (synthesized fields are) this estimates ``var[sigma_bar]``.
     """
     a = _array(field)
-    return np.asarray(_core.line_average_second_moment(a, axis % a.ndim, [int(n) for n in lengths]))
+    axis = _axis(a, axis)
+    n = a.shape[axis]
+    checked = [check_int("length", v, 1, max(n, 1)) for v in lengths]
+    return np.asarray(_core.line_average_second_moment(a, axis, checked))
 
 
 def save_field(

@@ -16,6 +16,7 @@ Images are linear RGB, row 0 at the top.
 
 from __future__ import annotations
 
+import math
 import os
 from typing import Any, Literal, Mapping, Sequence, Union, cast, overload
 
@@ -23,7 +24,7 @@ import numpy as np
 import numpy.typing as npt
 
 from . import _core
-from ._progress import Progress, check_seed, progress_sink
+from ._progress import MAX_THREADS, U32_MAX, Progress, check_int, check_seed, progress_sink
 
 __all__ = ["render", "write_exr", "write_png"]
 
@@ -127,7 +128,10 @@ def render(
         is quiet; an object with ``update(n)`` gets the samples finished; a
         callable is called as ``progress(done, total)``.
     return_variance : bool
-        Also return the per-pixel variance of the pixel mean.
+        Also return the per-pixel variance of the pixel mean (the sample
+        variance over the pixel's samples divided by their count). It needs
+        at least 2 samples per pixel: with 1 it is undefined, and
+        :class:`fgf.ParameterError` is raised instead of returning NaN.
     client : dask.distributed.Client, optional
         Render chunks of ``chunk_spp`` samples per pixel on the client's
         workers (``fgf.cluster``, ``docs/cluster.md``). The image has the
@@ -183,15 +187,19 @@ def render(
     with progress_sink(progress, "render") as sink:
         img, var, done, interrupted = _core.render_scene(
             os.fspath(scene),
-            spp=spp,
+            spp=None if spp is None else check_int("spp", spp, 1, U32_MAX),
             seed=None if seed is None else check_seed(seed),
-            threads=threads,
+            threads=None if threads is None else check_int("threads", threads, 1, MAX_THREADS),
             defines=_defines_list(defines),
             progress=sink,
             return_variance=return_variance,
         )
     if interrupted:
         raise KeyboardInterrupt(f"render interrupted after {done} samples per pixel")
+    if return_variance and done < 2:
+        raise _core.ParameterError(
+            f"spp = {done}: the per-pixel variance needs at least 2 samples per pixel (undefined for 1)"
+        )
     # The native call returns a variance exactly when asked for one.
     return (img, cast(Image, var)) if return_variance else img
 
@@ -211,4 +219,7 @@ def write_exr(path: str | os.PathLike[str], img: npt.ArrayLike) -> None:
 def write_png(path: str | os.PathLike[str], img: npt.ArrayLike, exposure: float = 0.0) -> None:
     """Write an ``(H, W, 3)`` linear image as an 8-bit sRGB PNG preview
     (exposure in stops, then clamp, then the sRGB curve), atomically."""
-    _core.write_png(os.fspath(path), _as_image(img), float(exposure))
+    stops = float(exposure)
+    if not math.isfinite(stops):
+        raise _core.ParameterError(f"invalid exposure = {exposure!r}: must be a finite number of stops")
+    _core.write_png(os.fspath(path), _as_image(img), stops)

@@ -588,7 +588,9 @@ def c_const(hurst: float, d: int = 1) -> float:
     >>> fgf.c_const(0.5, 1)
     -0.5
     """
-    return _core.c_const(float(hurst), int(d))
+    from ._progress import check_int
+
+    return _core.c_const(float(hurst), check_int("d", d, 1, 3))
 
 
 def s_p(hurst: float, sw: float) -> float:
@@ -611,7 +613,9 @@ def binom(a: float, k: int) -> float:
     >>> fgf.binom(-0.5, 3)
     -0.3125
     """
-    return _core.binom(float(a), int(k))
+    from ._progress import U32_MAX, check_int
+
+    return _core.binom(float(a), check_int("k", k, 0, U32_MAX))
 
 
 @overload
@@ -627,7 +631,7 @@ def kfbm_point_variance(hurst: float, sw: float, x: npt.ArrayLike) -> Union[floa
     Parameters
     ----------
     hurst : float
-        ``0 < hurst < 1000``, not an integer.
+        ``1e-15 <= hurst < 1000``, not an integer.
     sw : float
         ``S_w > 0``.
     x : float or array_like

@@ -47,9 +47,17 @@ pub enum Regime {
 /// integer. It is a validation bound, never a clamp.
 pub const HURST_MAX: f64 = 1000.0;
 
+/// Smallest accepted `|hurst|` (pink and k-fBm alike). The line-average
+/// variance diverges like `1/|H|` as `H → 0` and the k-fBm closed forms need
+/// `2H` next to 1 (`1 + 2H`, `t^(2H) - 1`): below about `1e-16` double
+/// precision rounds `1 + 2H` to 1 and the model returns NaN; at `1e-15` the
+/// forms still keep several digits (checked on a log grid down to the
+/// smallest double by the tests). A validation bound, never a clamp.
+pub const HURST_MIN_ABS: f64 = 1e-15;
+
 /// Valid range of `hurst`, as quoted in error messages.
 pub const HURST_RANGE: &str =
-    "hurst = -0.5 (white), -0.5 < hurst < 0 (pink), or 0 < hurst < 1000 non-integer (k-fBm)";
+    "hurst = -0.5 (white), -0.5 < hurst <= -1e-15 (pink), or 1e-15 <= hurst < 1000 non-integer (k-fBm)";
 
 impl Regime {
     /// Classify `hurst`; errors for NaN/inf, `H < -1/2`, `H = 0`, integer `H`
@@ -65,11 +73,16 @@ impl Regime {
         if hurst == -0.5 {
             return Ok(Regime::White);
         }
-        if hurst < 0.0 {
+        if hurst <= -HURST_MIN_ABS {
             return Ok(Regime::Pink);
         }
         if hurst == 0.0 {
             return Err(err("must not be 0 (the covariance is logarithmic there)"));
+        }
+        if hurst.abs() < HURST_MIN_ABS {
+            return Err(err(
+                "must be at least 1e-15 away from 0 (the variance diverges like 1/|hurst| and double precision loses the model below)",
+            ));
         }
         if hurst >= HURST_MAX {
             return Err(err("must be < 1000"));

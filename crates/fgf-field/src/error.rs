@@ -11,7 +11,7 @@ pub enum FieldError {
     #[error(transparent)]
     Param(#[from] ParamError),
     /// Refused before allocating anything.
-    #[error("{what} needs about {} but only {} is available (MemAvailable in /proc/meminfo); use a smaller shape, less padding or float32", fmt_bytes(*.needed), fmt_bytes(*.available))]
+    #[error("{what} needs about {} but only {} is available (MemAvailable in /proc/meminfo, or what the address-space limit leaves); use a smaller shape, less padding or float32", fmt_bytes(*.needed), fmt_bytes(*.available))]
     OutOfMemory {
         what: String,
         needed: u64,
@@ -37,7 +37,27 @@ pub fn mem_available() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = s.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
-    Some(kib * 1024)
+    let system = kib * 1024;
+    // Under an address-space limit (`ulimit -v`) an allocation past it fails
+    // and Rust aborts: what counts is the room left below the limit.
+    Some(match address_space_left() {
+        Some(left) => system.min(left),
+        None => system,
+    })
+}
+
+/// The process's address-space limit (RLIMIT_AS, from /proc/self/limits)
+/// minus its current virtual size; `None` when unlimited or unknown.
+fn address_space_left() -> Option<u64> {
+    let limits = std::fs::read_to_string("/proc/self/limits").ok()?;
+    let line = limits
+        .lines()
+        .find(|l| l.starts_with("Max address space"))?;
+    let soft: u64 = line.split_whitespace().nth(3)?.parse().ok()?;
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let vm = status.lines().find(|l| l.starts_with("VmSize:"))?;
+    let used_kib: u64 = vm.split_whitespace().nth(1)?.parse().ok()?;
+    Some(soft.saturating_sub(used_kib * 1024))
 }
 
 /// Refuse `needed` bytes if they exceed what the system has available.

@@ -12,6 +12,10 @@ use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 use std::f64::consts::PI;
 
+/// Most bins [`radial_power_spectrum`] accepts: far more than any field
+/// has distinct radii worth averaging, and small enough to allocate.
+pub const MAX_BINS: usize = 1 << 20;
+
 fn check(shape: &[usize], len: usize, axis: Option<usize>) -> Result<(), ParamError> {
     if shape.is_empty() || shape.len() > 3 || shape.iter().product::<usize>() != len || len == 0 {
         return Err(ParamError::new(
@@ -156,12 +160,12 @@ pub fn radial_power_spectrum<T: Copy + Into<f64> + Sync>(
 ) -> Result<RadialSpectrum, ParamError> {
     check(shape, data.len(), None)?;
     ParamError::check_positive("spacing", spacing)?;
-    if n_bins == 0 {
+    if n_bins == 0 || n_bins > MAX_BINS {
         return Err(ParamError::new(
             "n_bins",
             n_bins,
-            "need at least one bin",
-            "n_bins >= 1",
+            "need at least one bin, and no more than MAX_BINS (the bins are allocated up front)",
+            format!("1 <= n_bins <= {MAX_BINS}"),
         ));
     }
     let d = shape.len();

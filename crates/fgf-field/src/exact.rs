@@ -110,6 +110,14 @@ pub fn sample_optical_depth(
     let h = hurst + 1.0;
     let dt = t_max / n_steps as f64;
     let var = s_p(hurst, sw) * dt.powf(2.0 * h);
+    // For very long or very short steps `dt^(2h)` alone over- or underflows
+    // although the paths (which scale as `dt^h`, self-similarity) do not:
+    // then build the unit-step paths and scale them by `dt^h`.
+    let (var, path_scale) = if var.is_normal() {
+        (var, 1.0)
+    } else {
+        (s_p(hurst, sw), dt.powf(h))
+    };
     let gamma = |j: usize| {
         let j = j as f64;
         0.5 * var
@@ -140,7 +148,7 @@ pub fn sample_optical_depth(
     }
     let sqrt_lambda: Vec<f64> = c
         .iter()
-        .map(|v| (v.re.max(0.0) / big_m as f64).sqrt())
+        .map(|v| (v.re.max(0.0) / big_m as f64).sqrt() * path_scale)
         .collect();
 
     let mut values = vec![0.0f64; n_rays * cols];
@@ -181,6 +189,15 @@ pub fn sample_optical_depth(
         },
     );
     progress.check_cancelled()?;
+    if let Some(v) = values.iter().find(|v| !v.is_finite()) {
+        return Err(ParamError::new(
+            "t_max",
+            t_max,
+            format!("the optical depth overflows double precision ({v}) with sw = {sw}; use a shorter t_max or a smaller sw"),
+            "tau_u(t_max) within the double range",
+        )
+        .into());
+    }
     Ok(Samples1d {
         t: grid(n_steps, t_max),
         n_paths: n_rays,

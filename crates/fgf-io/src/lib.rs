@@ -16,6 +16,28 @@ pub mod vol;
 use std::io::Write;
 use std::path::{Path, PathBuf};
 
+/// Check that `path` is a regular file (following symlinks) before anyone
+/// opens it: opening a FIFO blocks until a writer appears, and a device or a
+/// directory is never a scene, mesh or grid.
+pub fn check_regular(path: &Path) -> std::io::Result<std::fs::Metadata> {
+    let meta = std::fs::metadata(path)?;
+    if meta.is_file() {
+        return Ok(meta);
+    }
+    let what = if meta.is_dir() {
+        "a directory"
+    } else {
+        "not a regular file (a FIFO, socket or device)"
+    };
+    Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, what))
+}
+
+/// [`std::fs::read`] of a regular file only (see [`check_regular`]).
+pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
+    check_regular(path)?;
+    std::fs::read(path)
+}
+
 /// An I/O or format error, always naming the file.
 #[derive(Debug, thiserror::Error)]
 pub enum IoError {

@@ -101,6 +101,23 @@ pub fn parse_vol(path: &Path, b: &[u8]) -> Result<VolGrid> {
     for (i, v) in bbox.iter_mut().enumerate() {
         *v = read_f32(b, 24 + 4 * i);
     }
+    // An infinite or NaN box would make the medium vanish without a word.
+    if let Some(i) = bbox.iter().position(|v| !v.is_finite()) {
+        let name = ["xmin", "ymin", "zmin", "xmax", "ymax", "zmax"][i];
+        return Err(err(format!(
+            "bounding box {name} = {} is not finite (the box must be finite, min <= max)",
+            bbox[i]
+        )));
+    }
+    if let Some(a) = (0..3).find(|&a| bbox[a] > bbox[a + 3]) {
+        return Err(err(format!(
+            "bounding box has {}min = {} > {}max = {} (need min <= max)",
+            ["x", "y", "z"][a],
+            bbox[a],
+            ["x", "y", "z"][a],
+            bbox[a + 3]
+        )));
+    }
     let data: Vec<f32> = b[HEADER..]
         .chunks_exact(4)
         .map(|c| f32::from_le_bytes(c.try_into().unwrap()))
@@ -118,7 +135,7 @@ pub fn parse_vol(path: &Path, b: &[u8]) -> Result<VolGrid> {
 
 /// Read a `.vol` file.
 pub fn read_vol(path: &Path) -> Result<VolGrid> {
-    let b = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let b = crate::read_regular(path).map_err(|e| IoError::io(path, e))?;
     parse_vol(path, &b)
 }
 

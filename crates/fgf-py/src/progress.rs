@@ -212,3 +212,46 @@ where
     }
     Ok(JobResult { value, interrupted })
 }
+
+/// Run a short job that may block (loading a scene: reading files, parsing
+/// includes) on its own thread, with the GIL released, checking for Ctrl-C
+/// every 50 ms. On Ctrl-C the job's `cancel` flag is set (a loader polls it
+/// and stops soon after) and the `KeyboardInterrupt` is returned at once,
+/// without waiting for the job: a read that blocks in the kernel must not
+/// keep the interrupt from working.
+pub fn run_interruptible<R, F>(py: Python<'_>, job: F) -> PyResult<R>
+where
+    R: Send + 'static,
+    F: FnOnce(&AtomicBool) -> R + Send + 'static,
+{
+    use std::sync::mpsc::{channel, RecvTimeoutError};
+    use std::sync::Arc;
+    let cancel = Arc::new(AtomicBool::new(false));
+    let (tx, rx) = channel();
+    let flag = cancel.clone();
+    std::thread::Builder::new()
+        .name("fgf-load".into())
+        .spawn(move || {
+            let _ = tx.send(job(&flag));
+        })
+        .map_err(|e| pyo3::exceptions::PyOSError::new_err(format!("cannot start a thread: {e}")))?;
+    let mut rx = rx;
+    loop {
+        let (got, back) = py.detach(move || (rx.recv_timeout(Duration::from_millis(50)), rx));
+        rx = back;
+        match got {
+            Ok(value) => return Ok(value),
+            Err(RecvTimeoutError::Disconnected) => {
+                return Err(pyo3::exceptions::PyRuntimeError::new_err(
+                    "internal error: the scene loader stopped without a result",
+                ))
+            }
+            Err(RecvTimeoutError::Timeout) => {
+                if let Err(e) = py.check_signals() {
+                    cancel.store(true, Ordering::Relaxed);
+                    return Err(e);
+                }
+            }
+        }
+    }
+}

@@ -68,8 +68,11 @@ pub(crate) fn load_scene(
     defines: Option<Vec<(String, String)>>,
 ) -> PyResult<fgf_scene::SceneDesc> {
     let defines = defines.unwrap_or_default();
-    py.detach(|| fgf_scene::load_file(scene, &defines))
-        .map_err(scene_err)
+    let scene = scene.to_path_buf();
+    crate::progress::run_interruptible(py, move |cancel| {
+        fgf_scene::load_file_cancellable(&scene, &defines, Some(cancel))
+    })?
+    .map_err(scene_err)
 }
 
 /// Run `go` on a local rayon pool of `threads` workers (all cores if
@@ -374,6 +377,11 @@ fn write_png(
     img: PyReadonlyArray3<'_, f32>,
     exposure: f32,
 ) -> PyResult<()> {
+    if !exposure.is_finite() {
+        return Err(ParameterError::new_err(format!(
+            "invalid exposure = {exposure}: must be a finite number of stops (|exposure| < 3.4e38)"
+        )));
+    }
     let (h, w, data) = image_data(&img)?;
     py.detach(|| fgf_io::image::write_png_preview(&path, w, h, 3, &data, exposure))
         .map_err(io_err)

@@ -259,7 +259,7 @@ fn s_kf(hurst: f64, sw: f64) -> PyResult<f64> {
             "hurst",
             hurst,
             "S_kf is defined for k-fBm",
-            "0 < hurst < 1000, not an integer",
+            "1e-15 <= hurst < 1000, not an integer",
         ))),
     }
 }
@@ -286,7 +286,7 @@ fn kfbm_point_variance<'py>(
             "hurst",
             hurst,
             "the k-fBm point variance needs hurst > 0",
-            "0 < hurst < 1000, not an integer",
+            "1e-15 <= hurst < 1000, not an integer",
         )));
     }
     check_sw(sw)?;

@@ -26,6 +26,23 @@ pub enum SceneErrorKind {
     Io,
     /// A referenced file has invalid content (bad `.vol` header, bad mesh).
     Format,
+    /// The caller asked the load to stop (Ctrl-C).
+    Cancelled,
+}
+
+/// Longest user value that a message quotes in full.
+pub const CLIP_CHARS: usize = 80;
+
+/// `value`, cut to [`CLIP_CHARS`] characters with its length said, for
+/// quoting user input (a `-D` value, an attribute) in a one-line message.
+pub fn clip(value: &str) -> String {
+    let n = value.chars().count();
+    if n <= CLIP_CHARS {
+        value.to_string()
+    } else {
+        let head: String = value.chars().take(CLIP_CHARS).collect();
+        format!("{head}... ({n} characters)")
+    }
 }
 
 /// A scene-loading error; see the module docs for its display form.

@@ -19,4 +19,4 @@ pub mod xml;
 
 pub use desc::*;
 pub use error::{SceneError, SceneErrorKind};
-pub use xml::{load_file, load_str};
+pub use xml::{load_file, load_file_cancellable, load_str};

@@ -5,13 +5,18 @@ Each subcommand lives in its own module of this package and provides
 function ``run(args) -> int``. Errors from fgf (bad parameters, bad scene
 files) and from the operating system (missing files, permissions) are
 printed as one line ``fgf <command>: error: ...`` with exit code 2; never as
-a traceback.
+a traceback. Ctrl-C at any stage (imports, argument parsing, scene loading,
+rendering, writing) exits with code 130 and one line: the package installs
+an exit-on-SIGINT handler before its heavy imports when it is run as the
+``fgf`` command (see ``fgf/__init__.py``), and :func:`main` hands SIGINT
+back to Python's ``KeyboardInterrupt`` once it is ready to catch it.
 """
 
 from __future__ import annotations
 
 import argparse
 import importlib
+import signal
 import sys
 
 # Subcommand modules, in the order ``fgf --help`` lists them.
@@ -29,25 +34,48 @@ def build_parser() -> argparse.ArgumentParser:
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"{__name__}.{name}").register(sub)
+    from ._args import harden
+
+    harden(parser)
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = build_parser()
-    args = parser.parse_args(argv)
-    from .. import FgfError
-
+    command = "fgf"
     try:
-        return int(args.func(args) or 0)
-    except FgfError as e:
-        print(f"fgf {args.command}: error: {e}", file=sys.stderr)
-        return 2
-    except OSError as e:
-        print(f"fgf {args.command}: error: {e}", file=sys.stderr)
-        return 2
+        # From here on Ctrl-C is a KeyboardInterrupt, caught below; the
+        # native module polls for it during long jobs.
+        if signal.getsignal(signal.SIGINT) is not signal.SIG_IGN:
+            signal.signal(signal.SIGINT, signal.default_int_handler)
+        from ._args import OptionError
+
+        parser = build_parser()
+        try:
+            args = parser.parse_args(argv)
+        except OptionError as e:
+            words = sys.argv[1:] if argv is None else argv
+            sub = next((w for w in words if w in COMMANDS), None)
+            print(f"fgf{' ' + sub if sub else ''}: error: {e}", file=sys.stderr)
+            return 2
+        command = f"fgf {args.command}"
+        from .. import FgfError
+
+        try:
+            return int(args.func(args) or 0)
+        except (FgfError, OSError) as e:
+            print(f"{command}: error: {_one_line(str(e))}", file=sys.stderr)
+            return 2
     except KeyboardInterrupt:
-        print(f"fgf {args.command}: interrupted", file=sys.stderr)
+        print(f"{command}: interrupted", file=sys.stderr)
         return 130
+
+
+def _one_line(message: str, limit: int = 2000) -> str:
+    """The message on one line, cut to ``limit`` characters."""
+    message = " ".join(message.split("\n"))
+    if len(message) > limit:
+        message = f"{message[:limit]}... ({len(message)} characters)"
+    return message
 
 
 if __name__ == "__main__":

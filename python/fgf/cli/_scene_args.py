@@ -12,6 +12,8 @@ import argparse
 import math
 from pathlib import Path
 
+from .._atomic import StagedOutputs
+
 SEED_MAX = 2**64 - 1
 
 
@@ -65,3 +67,19 @@ def check_scene_options(args: argparse.Namespace, extra_exr: dict[str, str | Non
         if value is not None:
             _check_output(option, Path(value), ".exr")
     return out, png
+
+
+def stage_outputs(outputs: list[tuple[str, str | Path | None]]) -> StagedOutputs:
+    """Check every output of a run before it starts (``(option, path)``
+    pairs, ``None`` for an output not asked for) and reserve each one's
+    temporary file; the run writes those, then commits them together.
+    Two options naming the same file are refused."""
+    staged = StagedOutputs()
+    try:
+        for option, value in outputs:
+            if value is not None:
+                staged.add(option, value)
+    except BaseException:
+        staged.discard()
+        raise
+    return staged

@@ -24,9 +24,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
+
+from .._atomic import StagedOutputs
 
 from ._cluster_args import add_cluster_options, check_cluster_options, client_for, summary_lost, wants_chunks
-from ._scene_args import add_scene_options, check_scene_options
+from ._scene_args import add_scene_options, check_scene_options, stage_outputs
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -69,6 +72,14 @@ def run(args: argparse.Namespace) -> int:
         raise ParameterError(f"--padding {args.padding}: the periodic synthesis domain must be 1 to 16 grid sides per axis")
     out, png = check_scene_options(args, {"--stderr": args.stderr})
     check_cluster_options(args)
+    with stage_outputs([("-o", out), ("--png", png), ("--stderr", args.stderr)]) as staged:
+        return _ensemble(args, out, png, staged)
+
+
+def _ensemble(args: argparse.Namespace, out: Path, png: Path, staged: StagedOutputs) -> int:
+    from .. import _core
+    from ..render import _defines_list
+
     t0 = time.perf_counter()
     lost = None
     if wants_chunks(args):
@@ -111,10 +122,11 @@ def run(args: argparse.Namespace) -> int:
     if done == 0:
         print("fgf ensemble: interrupted before the first realization finished; nothing written", file=sys.stderr)
         return 130
-    _core.write_exr(str(out), mean)
-    _core.write_png(str(png), mean, args.exposure)
+    _core.write_exr(staged["-o"], mean)
+    _core.write_png(staged["--png"], mean, args.exposure)
     if args.stderr is not None:
-        _core.write_exr(args.stderr, se)
+        _core.write_exr(staged["--stderr"], se)
+    staged.commit()
     written = ", ".join(str(p) for p in [out, png] + ([args.stderr] if args.stderr is not None else []))
     if not args.quiet or interrupted:
         for m in info["media"]:

@@ -22,6 +22,7 @@ Examples::
 from __future__ import annotations
 
 from .._progress import check_int, check_seed
+from ._args import echo
 
 import argparse
 import sys
@@ -74,10 +75,13 @@ def _anchor(text: str) -> str | list[int]:
     if t in ("corner", "center", "centre", "none"):
         return t
     try:
-        return [int(v) for v in t.split(",")]
+        idx = [int(v) for v in t.split(",")]
+        if any(not 0 <= v < 2**62 for v in idx):
+            raise ValueError
+        return idx
     except ValueError:
         raise ParameterError(
-            f"invalid anchor = {text!r}: not a keyword or a list of indices (valid: corner, center, none, or e.g. 0,10,10)"
+            f"invalid --anchor = {echo(text)}: not a keyword or a list of sample indices >= 0 (valid: corner, center, none, or e.g. 0,10,10)"
         ) from None
 
 

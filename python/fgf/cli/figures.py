@@ -18,6 +18,10 @@ from __future__ import annotations
 import argparse
 import sys
 
+SEED_MAX = 2**64 - 1
+#: Larger than every offset a figure group adds to the base seed.
+SEED_OFFSET_MAX = 1000
+
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
     from ..figures import GROUPS
@@ -52,7 +56,16 @@ def run(args: argparse.Namespace) -> int:
     import os
     import time
 
+    from .. import ParameterError
     from ..figures import make_figures
+
+    # Every group derives its seeds as --seed + an offset below SEED_OFFSET_MAX;
+    # checked here, before the output directory is created.
+    if not 0 <= args.seed <= SEED_MAX - SEED_OFFSET_MAX:
+        raise ParameterError(
+            f"invalid --seed = {args.seed}: must be in [0, {SEED_MAX - SEED_OFFSET_MAX}] "
+            f"(the figure groups derive seeds up to --seed + {SEED_OFFSET_MAX})"
+        )
 
     if args.scene_dir is not None and not os.path.isdir(args.scene_dir):
         # Checked before any figure is made: a typo should not cost the

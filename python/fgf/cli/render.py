@@ -18,9 +18,12 @@ from __future__ import annotations
 import argparse
 import sys
 import time
+from pathlib import Path
+
+from .._atomic import StagedOutputs
 
 from ._cluster_args import add_cluster_options, check_cluster_options, client_for, summary_lost, wants_chunks
-from ._scene_args import add_scene_options, check_scene_options
+from ._scene_args import add_scene_options, check_scene_options, stage_outputs
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -45,7 +48,18 @@ def run(args: argparse.Namespace) -> int:
 
     out, png = check_scene_options(args, {"--variance": args.variance})
     check_cluster_options(args)
+    if args.variance is not None and args.spp is not None and args.spp < 2:
+        from .. import ParameterError
+
+        raise ParameterError(f"--spp {args.spp} with --variance: the per-pixel variance needs at least 2 samples per pixel")
     defines = _defines_list(args.defines)
+    with stage_outputs([("-o", out), ("--png", png), ("--variance", args.variance)]) as staged:
+        return _render(args, out, png, defines, staged)
+
+
+def _render(args: argparse.Namespace, out: Path, png: Path, defines: list[tuple[str, str]], staged: StagedOutputs) -> int:
+    from .. import _core
+
     t0 = time.perf_counter()
     lost = None
     resumed = 0
@@ -81,13 +95,22 @@ def run(args: argparse.Namespace) -> int:
     if done == 0 and lost is not None:
         print(f"fgf render: error: {lost}; no chunk had finished, nothing written", file=sys.stderr)
         return 2
+    if var is not None and done < 2:
+        # The variance of a 1-sample mean is undefined (NaN): write nothing.
+        print(
+            f"fgf render: error: --variance needs at least 2 samples per pixel; {done} "
+            f"{'were done before the interrupt' if interrupted else 'were rendered'}; nothing written",
+            file=sys.stderr,
+        )
+        return 130 if interrupted else 2
     if done == 0:
         print("fgf render: interrupted before the first pass finished; nothing written", file=sys.stderr)
         return 130
-    _core.write_exr(str(out), img)
-    _core.write_png(str(png), img, args.exposure)
+    _core.write_exr(staged["-o"], img)
+    _core.write_png(staged["--png"], img, args.exposure)
     if var is not None:
-        _core.write_exr(args.variance, var)
+        _core.write_exr(staged["--variance"], var)
+    staged.commit()
     written = ", ".join(str(p) for p in [out, png] + ([args.variance] if var is not None else []))
     h, w = img.shape[:2]
     code = summary_lost("render", lost, written, f"the image of the {done} samples per pixel", args.checkpoint)

@@ -289,6 +289,31 @@ pub fn synthesize(params: &SynthParams, progress: &dyn Progress) -> Result<Field
         Precision::F32 => FieldData::F32(transform::run::<f32>(&plan, params.seed, progress)?),
         Precision::F64 => FieldData::F64(transform::run::<f64>(&plan, params.seed, progress)?),
     };
+    // The filter is sqrt(S_w / dx^d) |k|^(-s): extreme sw or spacing
+    // overflow (or underflow into 0 * inf) the requested precision. Name
+    // the parameters, not a later writer.
+    if let Some(i) = (0..data.len()).find(|&i| !data.get(i).is_finite()) {
+        let g = |v: f64| {
+            if v != 0.0 && !(1e-4..1e16).contains(&v.abs()) {
+                format!("{v:e}")
+            } else {
+                format!("{v}")
+            }
+        };
+        return Err(ParamError::new(
+            "sw",
+            g(params.sw),
+            format!(
+                "the field is not finite (sample #{i} is {}) with spacing = {}, hurst = {}: sw / spacing^d and spacing^(2H) must keep the values inside the {} range",
+                data.get(i),
+                g(params.spacing),
+                params.hurst,
+                match params.precision { Precision::F32 => "float32", Precision::F64 => "float64" }
+            ),
+            "a finite field: moderate sw and spacing (or float64)",
+        )
+        .into());
+    }
     Ok(Field {
         shape: params.shape.clone(),
         padded_shape: plan.pad[3 - plan.d..].to_vec(),

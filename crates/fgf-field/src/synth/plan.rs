@@ -61,7 +61,19 @@ impl Plan {
                 "shape = (nx,), (ny, nx) or (nz, ny, nx)",
             ));
         }
-        if p.shape.contains(&0) || p.shape.iter().product::<usize>() < 2 {
+        let total = p
+            .shape
+            .iter()
+            .try_fold(1usize, |acc, &n| acc.checked_mul(n));
+        if total.is_none() && !p.shape.contains(&0) {
+            return Err(ParamError::new(
+                "shape",
+                format!("{:?}", p.shape),
+                "the grid has more than 2^64 samples (the product of the axes overflows)",
+                "product of the axes < 2^64 (and within the available memory)",
+            ));
+        }
+        if p.shape.contains(&0) || total.unwrap_or(0) < 2 {
             return Err(ParamError::new(
                 "shape",
                 format!("{:?}", p.shape),

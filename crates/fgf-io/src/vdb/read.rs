@@ -6,7 +6,7 @@ use super::*;
 /// over its active bounding box (see the module summary for what is
 /// supported). Errors name the file.
 pub fn read_float_grid(path: &Path, grid_name: &str) -> Result<VdbGrid> {
-    let bytes = std::fs::read(path).map_err(|e| IoError::io(path, e))?;
+    let bytes = crate::read_regular(path).map_err(|e| IoError::io(path, e))?;
     parse_float_grid(path, &bytes, grid_name)
 }
 

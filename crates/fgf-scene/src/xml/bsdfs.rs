@@ -231,7 +231,8 @@ fn ior(e: &Entry) -> Result<f64, SceneError> {
             .map(|(_, v)| *v)
             .ok_or_else(|| {
                 e.node.err(format!(
-                    "unknown material '{s}' for {name} (give a number > 0 or one of: {})",
+                    "unknown material '{}' for {name} (give a number > 0 or one of: {})",
+                    crate::error::clip(s),
                     tables::IOR
                         .iter()
                         .map(|(k, _)| *k)

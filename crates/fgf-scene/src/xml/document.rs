@@ -3,9 +3,10 @@
 //! Each node remembers its file and line so that later errors can name them.
 
 use crate::error::{SceneError, SceneErrorKind};
-use std::cell::RefCell;
+use std::cell::{Cell, RefCell};
 use std::collections::{HashMap, HashSet};
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 
 /// Nesting deeper than this is refused. Real Mitsuba scenes nest about six
@@ -17,6 +18,12 @@ const MAX_INCLUDE_DEPTH: usize = 16;
 /// Total elements over the scene and all its includes: bounds the memory an
 /// include "diamond" (a file including another one many times) can take.
 const MAX_NODES: usize = 2_000_000;
+/// Longest attribute value after `$name` substitution, in bytes.
+pub(crate) const MAX_ATTR_BYTES: usize = 16 << 20;
+/// Total bytes that `$name` substitution may produce over the scene and its
+/// includes: a large `<default>` used in many attributes would otherwise grow
+/// the document without bound (a 1 MB value used 24,000 times is 24 GB).
+pub(crate) const MAX_SUBSTITUTED_BYTES: usize = 256 << 20;
 
 /// One XML element, owned, with substituted attribute values.
 #[derive(Debug)]
@@ -119,7 +126,7 @@ impl XNode {
     }
 }
 
-struct Builder {
+struct Builder<'c> {
     /// `$name` values: the caller's defines, then `<default>`s for names the
     /// caller did not define.
     params: HashMap<String, String>,
@@ -140,6 +147,10 @@ struct Builder {
     /// upgraded ([`upgrade_v1`]).
     upgrade: bool,
     nodes: usize,
+    /// Bytes produced by `$name` substitution so far.
+    substituted: Cell<usize>,
+    /// Set by the caller to stop the load (Ctrl-C); polled per element.
+    cancel: Option<&'c AtomicBool>,
 }
 
 /// Parse `xml` (the scene named `source_name`) into the top-level elements of
@@ -151,6 +162,7 @@ pub(crate) fn build(
     source_name: &str,
     base_dir: &Path,
     defines: &[(String, String)],
+    cancel: Option<&AtomicBool>,
 ) -> Result<(Vec<XNode>, Option<SceneError>), SceneError> {
     let mut b = Builder {
         params: HashMap::new(),
@@ -162,6 +174,8 @@ pub(crate) fn build(
         paths: Vec::new(),
         upgrade: false,
         nodes: 0,
+        substituted: Cell::new(0),
+        cancel,
     };
     for (k, v) in defines {
         if !is_ident(k) {
@@ -279,7 +293,7 @@ fn pos_of(doc: &roxmltree::Document, node: roxmltree::Node) -> (u32, u32) {
     (p.row, p.col)
 }
 
-impl Builder {
+impl Builder<'_> {
     /// Parse one file's text and append its `<scene>`'s children to `out`.
     fn file(
         &mut self,
@@ -442,7 +456,7 @@ impl Builder {
         }
         let name = node.req_attr("filename")?;
         let path = self.resolve_include(node, name);
-        let bytes = std::fs::read(&path).map_err(|e| {
+        let bytes = fgf_io::read_regular(&path).map_err(|e| {
             node.err_kind(
                 SceneErrorKind::Io,
                 format!("cannot read included file '{}': {e}", path.display()),
@@ -574,6 +588,9 @@ impl Builder {
         if n.tag_name().namespace().is_some() {
             return Err(node.err("XML namespaces are not supported in Mitsuba scenes"));
         }
+        if self.cancel.is_some_and(|c| c.load(Ordering::Relaxed)) {
+            return Err(node.err_kind(SceneErrorKind::Cancelled, "loading cancelled"));
+        }
         if self.nodes > MAX_NODES {
             return Err(node.err(format!(
                 "the scene has more than {MAX_NODES} elements (with its includes)"
@@ -637,12 +654,29 @@ impl Builder {
             let name = &after[..len];
             self.used.borrow_mut().insert(name.to_string());
             match self.params.get(name) {
-                Some(v) => out.push_str(v),
+                Some(v) => {
+                    let total = self.substituted.get() + v.len();
+                    self.substituted.set(total);
+                    if out.len() + v.len() > MAX_ATTR_BYTES {
+                        return Err(node.err(format!(
+                            "attribute {attr} grows past {} MiB after substituting ${name} (the limit of one attribute value)",
+                            MAX_ATTR_BYTES >> 20
+                        )));
+                    }
+                    if total > MAX_SUBSTITUTED_BYTES {
+                        return Err(node.err(format!(
+                            "$name substitution has produced more than {} MiB over the scene (at ${name} in attribute {attr}); use shorter <default> values",
+                            MAX_SUBSTITUTED_BYTES >> 20
+                        )));
+                    }
+                    out.push_str(v)
+                }
                 None => {
                     let mut known: Vec<&str> = self.params.keys().map(|s| s.as_str()).collect();
                     known.sort_unstable();
                     return Err(node.err(format!(
-                        "attribute {attr}=\"{value}\" uses ${name}, which has no <default name=\"{name}\" .../> and was not defined by the caller (defined: {})",
+                        "attribute {attr}=\"{}\" uses ${name}, which has no <default name=\"{name}\" .../> and was not defined by the caller (defined: {})",
+                        crate::error::clip(value),
                         if known.is_empty() { "none".to_string() } else { known.join(", ") }
                     )));
                 }

@@ -112,7 +112,17 @@ use std::path::Path;
 
 /// Load a scene file. `defines` override `<default>` values (`-D spp=256`).
 pub fn load_file(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc, SceneError> {
-    let text = std::fs::read(path).map_err(|e| {
+    load_file_cancellable(path, defines, None)
+}
+
+/// [`load_file`] that stops with a [`SceneErrorKind::Cancelled`] error soon
+/// after `cancel` is set (it is polled at every element and include).
+pub fn load_file_cancellable(
+    path: &Path,
+    defines: &[(String, String)],
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<SceneDesc, SceneError> {
+    let text = fgf_io::read_regular(path).map_err(|e| {
         SceneError::new(
             SceneErrorKind::Io,
             path,
@@ -133,7 +143,13 @@ pub fn load_file(path: &Path, defines: &[(String, String)]) -> Result<SceneDesc,
         Some(p) if !p.as_os_str().is_empty() => p.to_path_buf(),
         _ => std::path::PathBuf::from("."),
     };
-    load_str(&text, &path.display().to_string(), &base_dir, defines)
+    load_str_cancellable(
+        &text,
+        &path.display().to_string(),
+        &base_dir,
+        defines,
+        cancel,
+    )
 }
 
 /// Load a scene from a string. `source_name` names it in messages and
@@ -144,7 +160,17 @@ pub fn load_str(
     base_dir: &Path,
     defines: &[(String, String)],
 ) -> Result<SceneDesc, SceneError> {
-    let (nodes, unused_define) = document::build(xml, source_name, base_dir, defines)?;
+    load_str_cancellable(xml, source_name, base_dir, defines, None)
+}
+
+fn load_str_cancellable(
+    xml: &str,
+    source_name: &str,
+    base_dir: &Path,
+    defines: &[(String, String)],
+    cancel: Option<&std::sync::atomic::AtomicBool>,
+) -> Result<SceneDesc, SceneError> {
+    let (nodes, unused_define) = document::build(xml, source_name, base_dir, defines, cancel)?;
     let desc = instantiate(&nodes, source_name)?;
     // A define the scene never declares nor uses is a typo (`-D kernal=...`);
     // it is reported after the scene's own errors, which are more specific.

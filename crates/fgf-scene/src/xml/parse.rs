@@ -10,7 +10,8 @@ use crate::error::SceneError;
 pub(crate) fn parse_f64(node: &XNode, name: &str, s: &str) -> Result<f64, SceneError> {
     let v: f64 = s.trim().parse().map_err(|_| {
         node.err(format!(
-            "cannot parse '{s}' as a number for parameter '{name}'"
+            "cannot parse '{}' as a number for parameter '{name}'",
+            crate::error::clip(s)
         ))
     })?;
     if !v.is_finite() {

@@ -105,7 +105,8 @@ impl<'a> Entry<'a> {
         let s = self.value_attr()?;
         s.trim().parse::<i64>().map_err(|_| {
             self.node.err(format!(
-                "cannot parse '{s}' as an integer for parameter '{}'",
+                "cannot parse '{}' as an integer for parameter '{}'",
+                crate::error::clip(s),
                 self.name.unwrap_or("?")
             ))
         })
@@ -120,7 +121,8 @@ impl<'a> Entry<'a> {
             "true" => Ok(true),
             "false" => Ok(false),
             _ => Err(self.node.err(format!(
-                "cannot parse '{s}' as a boolean for parameter '{}' (valid: true, false)",
+                "cannot parse '{}' as a boolean for parameter '{}' (valid: true, false)",
+                crate::error::clip(s),
                 self.name.unwrap_or("?")
             ))),
         }
@@ -416,7 +418,8 @@ impl<'a> Props<'a> {
                     Ok(v.to_string())
                 } else {
                     Err(node.err(format!(
-                        "invalid {name} = '{v}' (valid: {})",
+                        "invalid {name} = '{}' (valid: {})",
+                        crate::error::clip(v),
                         choices.join(", ")
                     )))
                 }

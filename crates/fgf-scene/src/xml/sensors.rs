@@ -159,13 +159,34 @@ pub(crate) fn sensor_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<SensorD
         (Some(_), Some((_, fnode))) => {
             return Err(fnode.err("give either 'fov' or 'focal_length', not both"))
         }
-        (Some((v, node)), None) => check(node, "fov", v, FOV)? as f32,
+        (Some((v, node)), None) => {
+            let written = node.attr("value").unwrap_or("?");
+            let fov = check(node, "fov", v, FOV)? as f32;
+            // The description stores single precision: a value just below
+            // 180 (or above 0) may round onto the open range's end.
+            if !(FOV.ok)(fov as f64) {
+                return Err(node.err(format!(
+                    "invalid fov = '{}': it rounds to {fov} in single precision (valid: {})",
+                    crate::error::clip(written),
+                    FOV.text
+                )));
+            }
+            fov
+        }
         (None, Some((text, node))) => {
             let num = text.trim().strip_suffix("mm").unwrap_or(text).trim();
             let f = super::parse::parse_f64(node, "focal_length", num)?;
             check(node, "focal_length", f, FOCAL_LENGTH)?;
             s.fov_axis = FovAxis::X;
-            fov_from_focal_length(f, s.width, s.height) as f32
+            let fov = fov_from_focal_length(f, s.width, s.height) as f32;
+            if !(FOV.ok)(fov as f64) {
+                return Err(node.err(format!(
+                    "focal_length = '{}' gives a field of view of {fov} degrees in single precision (valid: {})",
+                    crate::error::clip(text),
+                    FOV.text
+                )));
+            }
+            fov
         }
         // Mitsuba's default is a 50 mm focal length, on this film's aspect.
         (None, None) => fov_from_focal_length(50.0, s.width, s.height) as f32,

@@ -162,7 +162,7 @@ pub(crate) fn gridvolume(
         n.err("missing required parameter 'filename' (a Mitsuba .vol file, relative to the scene file)")
     })?;
     let path = fnode.resolve(file);
-    let size = std::fs::metadata(&path)
+    let size = fgf_io::check_regular(&path)
         .map_err(|e| {
             fnode.err_kind(
                 SceneErrorKind::Io,

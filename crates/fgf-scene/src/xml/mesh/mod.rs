@@ -41,7 +41,7 @@ use glam::{Mat3, Mat4, Vec3};
 use std::path::Path;
 
 pub(super) fn read_file(fnode: &XNode, path: &Path, what: &str) -> Result<Vec<u8>, SceneError> {
-    std::fs::read(path).map_err(|e| {
+    fgf_io::read_regular(path).map_err(|e| {
         fnode.err_kind(
             SceneErrorKind::Io,
             format!("cannot read {what} file '{}': {e}", path.display()),
