@@ -48,9 +48,9 @@ SCENES: list[tuple[str, str | None]] = [
     (f"{MD}/docs/scenes/sampler_multijitter_16spp.xml", "checkerboard"),
     (f"{MD}/docs/scenes/sampler_orthogonal_25spp.xml", "checkerboard"),
     (f"{MD}/docs/scenes/sampler_ldsampler_16spp.xml", "checkerboard"),
-    (f"{MD}/scenes/matpreview/matpreview.xml", None),
-    (f"{MD}/tests/scenes/participating_media/test_homo_emitter_inside_medium_volpath.xml", None),
-    (f"{MD}/tests/scenes/participating_media/test_hetero_sigmat_volpath.xml", None),
+    (f"{MD}/scenes/matpreview/matpreview.xml", "checkerboard"),
+    (f"{MD}/tests/scenes/participating_media/test_homo_emitter_inside_medium_volpath.xml", "checkerboard"),
+    (f"{MD}/tests/scenes/participating_media/test_hetero_sigmat_volpath.xml", "checkerboard"),
     (f"{MD}/tests/scenes/participating_media/test_homo_area_light_volpath.xml", "checkerboard"),
 ]
 
@@ -67,12 +67,12 @@ DERIVED: list[tuple[str, str | None]] = [
     (f"{PM}/test_hetero_spectral_sigmat_volpathmis.xml", None),
     (f"{PM}/test_homo_area_light_volpath.xml", None),
     (f"{PM}/test_homo_dielectric_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", None),
+    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", "roughplastic"),
     (f"{PM}/test_homo_null_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", None),
+    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", "roughplastic"),
     (f"{PM}/test_homo_roughdielectric_spot_volpath.xml", None),
     (f"{PM}/test_homo_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_surf_area_light_volpath.xml", None),
+    (f"{PM}/test_surf_area_light_volpath.xml", "roughplastic"),
 ]
 ENVMAP = re.compile(r"<emitter\s+type=[\"']envmap[\"'][^>]*>.*?</emitter>", re.S)
 CHECKER = re.compile(r"<texture\s+type=[\"']checkerboard[\"']\s+name=[\"'](\w+)[\"'][^>]*>.*?</texture>", re.S)

@@ -61,8 +61,7 @@ def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
 
 
 def run(args: argparse.Namespace) -> int:
-    from .. import ParameterError, _core
-    from ..render import _defines_list
+    from .. import ParameterError
 
     if args.realizations < 1:
         raise ParameterError(f"--realizations {args.realizations}: need at least 1 (2 for a standard error)")
