@@ -24,7 +24,7 @@ import sys
 import time
 
 from ._cluster_args import add_cluster_options, check_cluster_options, client_for
-from ._scene_args import add_scene_options, check_scene_options
+from ._scene_args import add_scene_options, check_scene_options, stage_outputs
 
 
 def register(sub: argparse._SubParsersAction[argparse.ArgumentParser]) -> None:
@@ -61,34 +61,36 @@ def run(args: argparse.Namespace) -> int:
             f"{plan.tau_max:.3g} reproduced to {plan.closed_form_error:.1e}), {spp} spp per node",
             file=sys.stderr,
         )
-    bar = None if args.quiet else _core.TruthBar(plan.nodes * plan.width * plan.height * spp, "truth")
-    t0 = time.perf_counter()
-    try:
-        with client_for(args) as client:
-            img, se = truth(
-                args.scene,
-                spp=args.spp,
-                nodes=plan.nodes,
-                seed=args.seed,
-                defines=args.defines,
-                progress=bar,
-                threads=args.threads,
-                return_stderr=True,
-                client=client,
-                checkpoint=args.checkpoint,
-            )
-    except KeyboardInterrupt:
-        kept = f"; the finished nodes are in {args.checkpoint}" if args.checkpoint else ""
-        print(f"fgf truth: interrupted; nothing written (a partial quadrature sum is no truth){kept}", file=sys.stderr)
-        return 130
-    finally:
-        if bar is not None:
-            bar.close()
-    elapsed = time.perf_counter() - t0
-    _core.write_exr(str(out), img)
-    _core.write_png(str(png), img, args.exposure)
-    if args.stderr is not None:
-        _core.write_exr(args.stderr, se)
+    with stage_outputs([("-o", out), ("--png", png), ("--stderr", args.stderr)]) as staged:
+        bar = None if args.quiet else _core.TruthBar(plan.nodes * plan.width * plan.height * spp, "truth")
+        t0 = time.perf_counter()
+        try:
+            with client_for(args) as client:
+                img, se = truth(
+                    args.scene,
+                    spp=args.spp,
+                    nodes=plan.nodes,
+                    seed=args.seed,
+                    defines=args.defines,
+                    progress=bar,
+                    threads=args.threads,
+                    return_stderr=True,
+                    client=client,
+                    checkpoint=args.checkpoint,
+                )
+        except KeyboardInterrupt:
+            kept = f"; the finished nodes are in {args.checkpoint}" if args.checkpoint else ""
+            print(f"fgf truth: interrupted; nothing written (a partial quadrature sum is no truth){kept}", file=sys.stderr)
+            return 130
+        finally:
+            if bar is not None:
+                bar.close()
+        elapsed = time.perf_counter() - t0
+        _core.write_exr(staged["-o"], img)
+        _core.write_png(staged["--png"], img, args.exposure)
+        if args.stderr is not None:
+            _core.write_exr(staged["--stderr"], se)
+        staged.commit()
     if not args.quiet:
         written = ", ".join(str(p) for p in [out, png] + ([args.stderr] if args.stderr is not None else []))
         h, w = img.shape[:2]
