@@ -195,7 +195,7 @@ def test_cli_writes_outputs_and_exit_codes(tmp_path):
     assert out.exists() and out.with_suffix(".png").exists() and (tmp_path / "se.exr").exists()
     for args, words in [
         (["--nodes", "0"], "--nodes 0: need 1 <= nodes <= 4096"),
-        (["--spp", "0"], "--spp 0"),
+        (["--spp", "0"], "--spp: 0 is out of range (valid: 1 to"),
         (["-D", "nosuch=1"], "nosuch"),
     ]:
         r = fgf_cli("truth", scene, "-o", tmp_path / "u.exr", *args)
