@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 import fgf
-from test_render_mitsuba import ALPHA_BLOCKS, BLOCK, K, Z_MEAN, holm_rejects, welch
+from test_render_mitsuba import K, assert_agree
 
 SPP = 16
 
@@ -110,27 +110,7 @@ def render_mitsuba(scene: Path) -> np.ndarray:
 
 
 def compare(fgf_scene: Path, mitsuba_scene: Path) -> None:
-    f = render_fgf(fgf_scene)
-    m = render_mitsuba(mitsuba_scene)
-    assert f.shape == m.shape, (f.shape, m.shape)
-    assert np.isfinite(f).all()
-    ma, mb, se, t, _ = welch(f.mean(axis=(1, 2)), m.mean(axis=(1, 2)))
-    msg = f"{fgf_scene.name}: image mean fgf {ma} vs mitsuba {mb}, SE {se}, z {t}"
-    print(msg)
-    assert (np.abs(ma - mb) <= Z_MEAN * se).all(), msg
-    k, h, w, c = f.shape
-    fb = f.reshape(k, h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(2, 4))
-    mb_ = m.reshape(k, h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(2, 4))
-    a, b, se, t, p = welch(fb, mb_)
-    floor = 1e-5 * np.abs(f.mean())
-    p = np.where(np.abs(a - b) <= floor, 1.0, p)
-    rej = holm_rejects(p, ALPHA_BLOCKS)
-    if rej.any():
-        idx = np.argwhere(rej)
-        detail = "; ".join(
-            f"block {tuple(i)}: fgf {a[tuple(i)]:.5g} mitsuba {b[tuple(i)]:.5g} t {t[tuple(i)]:.2f}" for i in idx[:10]
-        )
-        pytest.fail(f"{fgf_scene.name}: {rej.sum()} of {rej.size} blocks differ (Holm): {detail}")
+    assert_agree(fgf_scene.name, render_fgf(fgf_scene), render_mitsuba(mitsuba_scene))
 
 
 @pytest.mark.parametrize("name", sorted(CASES))

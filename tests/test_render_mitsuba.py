@@ -89,13 +89,18 @@ def holm_rejects(p: np.ndarray, alpha: float) -> np.ndarray:
 
 
 def compare(scene: Path, defines: dict, spp: int) -> None:
-    f = render_fgf(scene, defines, spp)
-    m = render_mitsuba(scene, defines, spp)
+    assert_agree(scene.name, render_fgf(scene, defines, spp), render_mitsuba(scene, defines, spp))
+
+
+def assert_agree(name: str, f: np.ndarray, m: np.ndarray) -> None:
+    """fgf's K per-seed images `f` against Mitsuba's `m` (K, H, W, 3): the
+    image mean per channel within Z_MEAN standard errors, and the blocks by
+    Welch's t with Holm's correction."""
     assert f.shape == m.shape, (f.shape, m.shape)
     assert np.isfinite(f).all()
     # Image mean per channel.
     ma, mb, se, t, _ = welch(f.mean(axis=(1, 2)), m.mean(axis=(1, 2)))
-    msg = f"{scene.name}: image mean fgf {ma} vs mitsuba {mb}, SE {se}, z {t}"
+    msg = f"{name}: image mean fgf {ma} vs mitsuba {mb}, SE {se}, z {t}"
     print(msg)
     assert (np.abs(ma - mb) <= Z_MEAN * se).all(), msg
     # Blocks.
@@ -117,7 +122,7 @@ def compare(scene: Path, defines: dict, spp: int) -> None:
         detail = "; ".join(
             f"block {tuple(i)}: fgf {a[tuple(i)]:.5g} mitsuba {b[tuple(i)]:.5g} t {t[tuple(i)]:.2f}" for i in idx[:10]
         )
-        pytest.fail(f"{scene.name}: {rej.sum()} of {rej.size} blocks differ (Holm, alpha {ALPHA_BLOCKS}): {detail}")
+        pytest.fail(f"{name}: {rej.sum()} of {rej.size} blocks differ (Holm, alpha {ALPHA_BLOCKS}): {detail}")
 
 
 SMALL = {"res": 32}

@@ -4,12 +4,9 @@
 use crate::errors::ParameterError;
 use crate::progress::run_job;
 use crate::render::{check_spp_threads, in_pool, load_scene, render_err, to_hw3};
-use fgf_core::Progress;
 use fgf_render::ensemble::{
-    prepare, render_realization, total_samples, Accumulator, EnsembleError, EnsembleOptions,
-    EnsembleOutput, Marginal, RealizationError,
+    ensemble_from, total_samples, EnsembleError, EnsembleOptions, Marginal,
 };
-use fgf_scene::SceneDesc;
 use numpy::PyArrayMethods;
 use pyo3::prelude::*;
 use pyo3::types::PyDict;
@@ -133,42 +130,6 @@ fn ensemble_scene<'py>(
         info.set_item("realizations", arr)?;
     }
     Ok((mean, stderr, info, job.interrupted || cancelled))
-}
-
-/// `fgf_render::ensemble::ensemble` over the realizations
-/// `first..first + opts.realizations` (the same per-realization renders and
-/// the same in-order merge).
-fn ensemble_from(
-    scene: &SceneDesc,
-    opts: &EnsembleOptions,
-    first: u32,
-    progress: &dyn Progress,
-) -> Result<EnsembleOutput, EnsembleError> {
-    let prep = prepare(scene, opts)?;
-    let mut acc = Accumulator::new(&prep);
-    let mut interrupted = false;
-    for r in first..first.saturating_add(opts.realizations) {
-        if progress.cancelled() {
-            interrupted = true;
-            break;
-        }
-        match render_realization(&prep, r, progress) {
-            Ok(real) => acc.add(&real),
-            Err(RealizationError::Cancelled) => {
-                interrupted = true;
-                break;
-            }
-            Err(RealizationError::Render(e)) => return Err(e.into()),
-        }
-    }
-    let out = acc.finish(&prep);
-    if interrupted {
-        Err(EnsembleError::Cancelled {
-            partial: Box::new(out),
-        })
-    } else {
-        Ok(out)
-    }
 }
 
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {

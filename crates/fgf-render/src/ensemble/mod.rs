@@ -396,10 +396,22 @@ pub fn ensemble(
     opts: &EnsembleOptions,
     progress: &dyn Progress,
 ) -> Result<EnsembleOutput, EnsembleError> {
+    ensemble_from(scene, opts, 0, progress)
+}
+
+/// [`ensemble`] over the realizations `first..first + opts.realizations`:
+/// the same per-realization renders and the same in-order merge (a cluster
+/// task or a resumed run renders a later range).
+pub fn ensemble_from(
+    scene: &SceneDesc,
+    opts: &EnsembleOptions,
+    first: u32,
+    progress: &dyn Progress,
+) -> Result<EnsembleOutput, EnsembleError> {
     let prep = prepare(scene, opts)?;
     let mut acc = Accumulator::new(&prep);
     let mut interrupted = false;
-    for r in 0..opts.realizations {
+    for r in first..first.saturating_add(opts.realizations) {
         if progress.cancelled() {
             interrupted = true;
             break;
