@@ -313,7 +313,8 @@ ENSEMBLE_CASES = {
     "exposure_inf": (["-n", "2", "-o", "e.exr", "--exposure", "inf"], ["exposure"]),
     "missing_dir": (["-n", "2", "-o", "nodir/e.exr"], ["nodir"]),
     "stderr_missing_dir": (["-n", "2", "-o", "e.exr", "--stderr", "nodir/s.exr"], ["nodir"]),
-    "resolution_too_big": (["-n", "2", "--resolution", "100000", "-o", "e.exr"], ["GiB"]),
+    "resolution_too_big": (["-n", "2", "--resolution", "60000", "-o", "e.exr"], ["GiB"]),
+    "resolution_out_of_range": (["-n", "2", "--resolution", "100000", "-o", "e.exr"], ["--resolution", "2 to 65536"]),
 }
 
 

@@ -61,6 +61,7 @@ pub mod synth;
 pub use error::{mem_available, FieldError};
 pub use exact::{sample_kfbm_1d, sample_optical_depth, Samples1d, MAX_CHOLESKY_STEPS};
 pub use synth::{
-    discrete_spectral_variance, estimate_memory, padded_shape, sw_3d_for_ray_statistics,
-    synthesize, work_units, Anchor, Field, FieldData, Precision, Real, SynthParams,
+    check_synthesis_memory, discrete_spectral_variance, estimate_memory, padded_shape,
+    sw_3d_for_ray_statistics, synthesize, work_units, Anchor, Field, FieldData, Precision, Real,
+    SynthParams,
 };

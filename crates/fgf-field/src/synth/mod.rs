@@ -253,6 +253,24 @@ pub fn estimate_memory(params: &SynthParams) -> Result<Option<u64>, ParamError> 
     Ok(plan.bytes(elem_size(params.precision)))
 }
 
+/// The memory check [`synthesize`] makes before it allocates, for callers
+/// that do other work sized by the same request first (an ensemble's
+/// calibration): an error naming the shape and the GiB needed.
+pub fn check_synthesis_memory(params: &SynthParams) -> Result<(), FieldError> {
+    check_plan_memory(params, &Plan::new(params)?)
+}
+
+fn check_plan_memory(params: &SynthParams, plan: &Plan) -> Result<(), FieldError> {
+    check_memory(
+        &format!(
+            "a field of shape {:?} (periodic domain {:?})",
+            params.shape,
+            &plan.pad[3 - plan.d..]
+        ),
+        plan.bytes(elem_size(params.precision)),
+    )
+}
+
 /// Work units [`synthesize`] reports through [`Progress::inc`].
 pub fn work_units(params: &SynthParams) -> Result<u64, ParamError> {
     Ok(Plan::new(params)?.work_units())
@@ -277,14 +295,7 @@ fn elem_size(p: Precision) -> usize {
 /// ```
 pub fn synthesize(params: &SynthParams, progress: &dyn Progress) -> Result<Field, FieldError> {
     let plan = Plan::new(params)?;
-    check_memory(
-        &format!(
-            "a field of shape {:?} (periodic domain {:?})",
-            params.shape,
-            &plan.pad[3 - plan.d..]
-        ),
-        plan.bytes(elem_size(params.precision)),
-    )?;
+    check_plan_memory(params, &plan)?;
     let data = match params.precision {
         Precision::F32 => FieldData::F32(transform::run::<f32>(&plan, params.seed, progress)?),
         Precision::F64 => FieldData::F64(transform::run::<f64>(&plan, params.seed, progress)?),

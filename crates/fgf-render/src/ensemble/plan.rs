@@ -142,6 +142,11 @@ pub(super) fn plan(scene: &SceneDesc, opts: &EnsembleOptions) -> Result<Vec<Plan
             Marginal::Gaussian => false,
             Marginal::Auto => hurst < 0.0,
         };
+        // The realizations' synthesis is the largest allocation the request
+        // implies: refuse it (naming the GiB) before the calibration, whose
+        // spectral sums are sized by the same padded grid.
+        fgf_field::check_synthesis_memory(&params)
+            .map_err(|source| RenderError::Field { medium: i, source })?;
         let (voxels, grid_variances) = if gamma {
             let (calibration, copula) =
                 calibrate_gamma(&params, sigma_mean, &lengths, &model_variances)
