@@ -69,8 +69,13 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         t = Path(tmp)
         if args.calibrate:
-            dt = run_once(args.scene, defines, 8, t / "c.exr", ["--threads", "2"])
-            print(f"8 spp in {dt:.1f} s with 2 threads: use --spp {max(1, round(8 * 60 / dt))} for ~60 s")
+            # Two renders, so that the process start-up (most of a short
+            # render) is not extrapolated as if it were rendering time.
+            t_lo = run_once(args.scene, defines, 16, t / "c.exr", ["--threads", "2"])
+            t_hi = run_once(args.scene, defines, 256, t / "c.exr", ["--threads", "2"])
+            per_spp = max(t_hi - t_lo, 1e-3) / 240
+            spp = max(16, round((60 - t_lo) / per_spp + 16))
+            print(f"16 spp in {t_lo:.1f} s, 256 spp in {t_hi:.1f} s with 2 threads: use --spp {spp} for ~60 s")
             return 0
         configs: list[tuple[str, list[str]]] = []
         for n in args.workers:
