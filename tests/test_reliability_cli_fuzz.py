@@ -152,8 +152,11 @@ def _run(args: list[str]) -> tuple[int, str]:
 
 
 @pytest.mark.parametrize("command", sorted(OPTIONS))
-def test_random_options_exit_0_or_2(command, tmp_path_factory, tiny_work):
+def test_random_options_exit_0_or_2(command, tmp_path_factory, tiny_work, monkeypatch):
     tmp = tmp_path_factory.mktemp(command)
+    # Drawn text values become relative output paths (`--checkpoint A`):
+    # they land in the temporary folder, not in the working tree.
+    monkeypatch.chdir(tmp)
 
     @settings(max_examples=60, deadline=None, suppress_health_check=list(HealthCheck), derandomize=True)
     @given(argv(command, tmp))

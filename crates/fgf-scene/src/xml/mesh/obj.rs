@@ -24,6 +24,7 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
         ignore_points: true,
         ignore_lines: true,
     };
+    check_face_indices(&bytes).map_err(fmt)?;
     let mut reader = std::io::BufReader::new(&bytes[..]);
     let (models, _materials) =
         tobj::load_obj_buf(&mut reader, &opts, |_| Err(tobj::LoadError::OpenFileFailed))
@@ -97,4 +98,80 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
         indices,
     )
     .map_err(fmt)
+}
+
+/// Refuse face indices that do not name an element of the file, before
+/// `tobj` sees them: it turns an index into an array offset with unchecked
+/// arithmetic (`vt * 2 + 1`, `vn * 3 + 2`), which for a hostile index wraps
+/// and reads the wrong element, or panics where overflow is checked.
+///
+/// OBJ indices are 1-based; a negative index counts back from the elements
+/// declared so far. A positive index may name an element declared later
+/// in the file (tobj resolves faces at the end of each group). Lines tobj
+/// would refuse anyway (unparsable numbers) are left to it.
+fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
+    const KINDS: [&str; 3] = ["vertex", "texture coordinate", "normal"];
+    let kind_of = |w: &str| match w {
+        "v" => Some(0),
+        "vt" => Some(1),
+        "vn" => Some(2),
+        _ => None,
+    };
+    let lines = || bytes.split(|&b| b == b'\n').map(|l| std::str::from_utf8(l).unwrap_or(""));
+    let mut total = [0i64; 3];
+    for line in lines() {
+        if let Some(k) = line.split_whitespace().next().and_then(kind_of) {
+            total[k] += 1;
+        }
+    }
+    let mut so_far = [0i64; 3];
+    for (n, line) in lines().enumerate() {
+        let mut words = line.split_whitespace();
+        match words.next() {
+            Some("f" | "l") => {}
+            Some(w) => {
+                if let Some(k) = kind_of(w) {
+                    so_far[k] += 1;
+                }
+                continue;
+            }
+            None => continue,
+        }
+        for word in words {
+            for (k, part) in word.split('/').take(3).enumerate() {
+                let Ok(x) = part.parse::<i64>() else { continue };
+                let ok = if x > 0 { x <= total[k] } else { x < 0 && x >= -so_far[k] };
+                if !ok {
+                    let have = if x > 0 { total[k] } else { so_far[k] };
+                    return Err(format!(
+                        "line {}: face index {x} names no {} (valid: 1..={have}, or -{have}..=-1 counting back)",
+                        n + 1,
+                        KINDS[k]
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::check_face_indices;
+
+    #[test]
+    fn face_indices_are_checked_before_tobj() {
+        let ok = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\nf 1/1 2/1 -1/-1\n";
+        assert!(check_face_indices(ok).is_ok());
+        for (obj, line) in [
+            (&b"v 0 0 0\nf 1 2 3\n"[..], "line 2"),
+            (b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvt 0 0\nf 1/1 2/1 3/-9223372036854775808\n", "line 5"),
+            (b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvn 0 0 1\nf 1//1 2//1 3//6148914691236517206\n", "line 5"),
+            (b"v 0 0 0\nf 0 1 1\n", "line 2"),
+            (b"f -1 -1 -1\nv 0 0 0\n", "line 1"),
+        ] {
+            let e = check_face_indices(obj).unwrap_err();
+            assert!(e.starts_with(line), "{e}");
+        }
+    }
 }
