@@ -231,3 +231,66 @@ def test_sample_outside_the_exact_range_is_an_error_not_a_wrong_image(tmp_path):
     r = fgf_cli("render", str(scene), "-o", str(tmp_path / "b.exr"))
     assert r.returncode == 2 and "outside the exact accumulator's range" in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "b.exr").exists()
+
+
+def test_chunker_sizes_chunks_by_their_measured_time():
+    from fgf.cluster._chunks import Chunker
+
+    # 1000 pixels: before any timing, chunks are one pass of 2^18 samples.
+    c = Chunker([(0, 300), (310, 320)], spp=5000, pixels=1000, seconds=2.0)
+    first = c.take(slots=2)
+    assert first == (300, 310)  # the gap before the checkpoint's second range, cut short
+    assert c.take(slots=2) == (320, 320 + (1 << 18) // 1000)
+    # 0.5 s per 100 spp: a 2-s chunk is 400 spp.
+    c.observe(100, 0.5)
+    a, b = c.take(slots=2)
+    assert b - a == 400
+    # Near the end the rest is shared among the workers (two chunks each),
+    # down to a quarter of the target.
+    sizes = []
+    while (r := c.take(slots=2)) is not None:
+        sizes.append(r[1] - r[0])
+    assert sizes[:7] == [400] * 7 and sizes[7:11] == [305, 229, 171, 129]
+    assert min(sizes[:-1]) == 100 and sizes[-1] <= 100 and sum(sizes) == 5000 - 982
+    # An explicit chunk size wins; the ranges cover exactly what was missing.
+    fixed = Chunker([(4, 6)], spp=11, pixels=10, chunk_spp=3)
+    fixed.observe(3, 1.0)
+    got = []
+    while (r := fixed.take(slots=2)) is not None:
+        got.append(r)
+    assert got == [(0, 3), (3, 4), (6, 9), (9, 11)]
+
+
+def test_automatic_chunk_sizes_give_the_bits_of_fine_chunks_and_of_one_render(client, monkeypatch):
+    from fgf.cluster import _chunks
+
+    # Small probes and 10-ms chunks, so that this small film is cut into
+    # chunks of several sizes: probes of 2 spp, then sized by their time.
+    monkeypatch.setattr(_chunks, "PROBE_SAMPLES", 2 * 12 * 12)
+    monkeypatch.setattr(_chunks, "CHUNK_SECONDS", 0.01)
+    taken = []
+    take = _chunks.Chunker.take
+
+    def recording(self, slots=1):
+        r = take(self, slots)
+        if r is not None:
+            taken.append(r)
+        return r
+
+    monkeypatch.setattr(_chunks.Chunker, "take", recording)
+    spp, seed = 48, 13
+    auto = cluster.render(SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, client=client)
+    sizes = [b - a for a, b in taken]
+    assert sorted(taken)[0][0] == 0 and sum(sizes) == spp and len(set(sizes)) > 1, taken
+    taken.clear()
+    fine = cluster.render(
+        SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, client=client, chunk_spp=1
+    )
+    assert len(taken) == spp
+    img, var = reference(spp, seed)
+    for run in (auto, fine):
+        assert run.spp_done == spp and not run.interrupted
+        assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
+    # One machine, no cluster: the same chunking code, the same bits.
+    local = cluster.render(SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, threads=2)
+    assert np.array_equal(local.image, img) and np.array_equal(local.variance, var)
