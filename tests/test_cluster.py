@@ -294,3 +294,29 @@ def test_automatic_chunk_sizes_give_the_bits_of_fine_chunks_and_of_one_render(cl
     # One machine, no cluster: the same chunking code, the same bits.
     local = cluster.render(SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, threads=2)
     assert np.array_equal(local.image, img) and np.array_equal(local.variance, var)
+
+
+def test_checkpoint_with_holes_resumes_with_automatic_chunks(tmp_path, client, monkeypatch):
+    # Chunks of different sizes finishing out of order leave a checkpoint
+    # with holes: here samples [0, 2) and [5, 9) of 20. Automatic chunks
+    # fill exactly the rest, and the image has the bits of one render.
+    from fgf.cluster import _chunks, _film
+    from fgf.cluster._ship import ScenePayload
+
+    monkeypatch.setattr(_chunks, "PROBE_SAMPLES", 12 * 12)
+    monkeypatch.setattr(_chunks, "CHUNK_SECONDS", 0.01)
+    prep = fgf._core.prepare_scene(str(SCENE), SMALL)
+    held = cluster.render_chunk(prep, 5, 9, seed=8, variance=True)
+    held.merge(cluster.render_chunk(prep, 0, 2, seed=8, variance=True))
+    assert held.ranges == [(0, 2), (5, 9)]
+    meta = {"kind": "render", "scene_digest": ScenePayload.from_file(SCENE, SMALL).digest, "seed": 8,
+            "variance": True, "width": 12, "height": 12}
+    ck = tmp_path / "holes.ckpt"
+    _film.save(ck, meta, {"sum": held.sum, "sum_sq": held.sum_sq, "ranges": np.array(held.ranges).reshape(-1, 2)})
+    run = cluster.render(SCENE, spp=20, seed=8, defines=SMALL, progress=False, return_variance=True, client=client,
+                         checkpoint=ck)
+    assert run.resumed_spp == 6 and run.spp_done == 20
+    img, var = reference(20, 8)
+    assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
+    _, arrays = _film.load(ck)
+    assert arrays["ranges"].tolist() == [[0, 20]]
