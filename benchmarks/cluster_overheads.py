@@ -9,6 +9,8 @@ On a ``local:1`` cluster and ``scenes/fgf-cube-pink.xml -D res=128``:
   ``fgf.cluster.LOCAL_CLUSTER_CONFIG``;
 * open/close: wall time of ``fgf.cluster.open_client("local:N")`` and of
   leaving it;
+* shipping the scene and the first chunk on a fresh worker (which imports
+  fgf and compiles the scene, kept for the later chunks);
 * per chunk: ``--chunks`` chunks of ``--chunk-spp`` samples per pixel; the
   worker process's CPU beyond the same chunks rendered in this process
   (task handling, result serialization, Dask's bookkeeping), and the wall
@@ -107,8 +109,17 @@ def main() -> int:
     prep = _core.prepare_scene(args.scene, defines)
     pixels = prep.width * prep.height
     with cluster.open_client("local:1") as client:
-        payload = client.scatter(_ship.ScenePayload.from_file(args.scene, defines), broadcast=True, hash=False)
+        t0 = time.perf_counter()
+        shipped = _ship.ScenePayload.from_file(args.scene, defines)
+        payload = client.scatter(shipped, broadcast=True, hash=False)
+        t1 = time.perf_counter()
         client.submit(_tasks.render_task, payload, 0, 1, 1, False, pure=False).result()  # compiled once
+        t2 = time.perf_counter()
+        client.submit(_tasks.render_task, payload, 1, 2, 1, False, pure=False).result()
+        t3 = time.perf_counter()
+        print(f"shipping the scene ({shipped.nbytes} bytes): {(t1 - t0) * 1e3:.0f} ms; first 1-spp chunk on a new "
+              f"worker (imports fgf, compiles the scene) {(t2 - t1) * 1e3:.0f} ms, the next {(t3 - t2) * 1e3:.0f} ms",
+              flush=True)
         before = client.run(_process_cpu)
         t0 = time.perf_counter()
         futures = [client.submit(_tasks.render_task, payload, 1 + i * k, 1 + (i + 1) * k, 1, False, pure=False)
