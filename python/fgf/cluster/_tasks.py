@@ -66,6 +66,7 @@ class Chunk:
 
     sums: FilmSums
     seconds: float
+    #: Ctrl-C stopped it before its last sample (a render on this machine).
     interrupted: bool = False
 
 
