@@ -320,3 +320,70 @@ def test_checkpoint_with_holes_resumes_with_automatic_chunks(tmp_path, client, m
     assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
     _, arrays = _film.load(ck)
     assert arrays["ranges"].tolist() == [[0, 20]]
+
+
+def test_local_cluster_stops_its_workers_without_leftovers():
+    with cluster.open_client("local:1") as c:
+        (pid,) = c.run(os.getpid).values()
+        (folder,) = c.run(lambda dask_worker: dask_worker.local_directory).values()
+    # The worker process is gone (killed, not restarted) and leaves no lock.
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        pytest.fail(f"worker process {pid} still running")
+    assert not os.path.exists(folder) and not os.path.exists(folder + ".dirlock")
+
+
+def test_scheduler_lost_mid_render_writes_what_finished(tmp_path):
+    # A scheduler and a worker of our own; the scheduler is killed once the
+    # checkpoint shows a finished chunk: one line, exit code 2, the image of
+    # the chunks finished, and a checkpoint that resumes to the full image.
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    py = [sys.executable, "-m"]
+    # Their scratch folders (which a killed process leaves) go to tmp_path.
+    env = dict(os.environ, DASK_TEMPORARY_DIRECTORY=str(tmp_path))
+    procs = [subprocess.Popen(py + ["distributed.cli.dask_scheduler", "--port", str(port), "--no-dashboard"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    ck, out = tmp_path / "lost.ckpt", tmp_path / "lost.exr"
+    try:
+        procs.append(subprocess.Popen(py + ["distributed.cli.dask_worker", address, "--nworkers", "1", "--nthreads",
+                                            "1", "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                      env=env))
+        render = subprocess.Popen(
+            [sys.executable, "-m", "fgf", "render", str(SCENE), "-D", "res=16", "--spp", "200000", "--seed", "3",
+             "--cluster", address, "--checkpoint", str(ck), "-o", str(out), "--quiet"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        procs.append(render)
+        deadline = time.monotonic() + 90
+        while not ck.exists() and render.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert ck.exists(), "no chunk finished within 90 s"
+        procs[0].kill()
+        _, err = render.communicate(timeout=90)
+        assert render.returncode == 2, err
+        assert "lost the Dask scheduler" in err and len(err.strip().splitlines()) == 1, err
+        assert out.exists()
+        _, arrays = cluster._film.load(ck)
+        done = int(sum(b - a for a, b in arrays["ranges"].reshape(-1, 2)))
+        assert 0 < done < 200000
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait(timeout=30)
+    # Resumed here (no cluster) to a few more samples: the bits of one render.
+    run = cluster.render(SCENE, spp=done + 3, seed=3, defines=[("res", "16")], progress=False, checkpoint=ck)
+    assert run.resumed_spp == done and run.spp_done == done + 3
+    img = fgf.render(SCENE, spp=done + 3, seed=3, defines={"res": 16}, progress=False)
+    assert np.array_equal(run.image, img)

@@ -174,6 +174,10 @@ def open_client(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator["Cli
                     threads_per_worker=1,
                     processes=True,
                     dashboard_address=None,
+                    # No dashboard, and the scheduler's small HTTP server (health
+                    # checks) on a free port: two local runs at once would both
+                    # want 8787, and the second would print a warning.
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
                     silence_logs=logging.ERROR,
                 )
                 client = distributed.Client(cluster)
