@@ -9,20 +9,22 @@ outside; configurations are alternated within each round and the median of
 affects every configuration alike. Every cluster image is checked to be
 byte-identical to the threaded one. Configurations:
 
-* ``threads:T`` — ``fgf render --threads T`` (T = 1 and the worker count);
-* ``local:N`` — ``fgf render --cluster local:N --chunk-spp K``, N single-
-  threaded workers (N = 1 and 2 by default).
+* ``threads:N`` — ``fgf render --threads N``, today's single-process path;
+* ``local:N`` — ``fgf render --cluster local:N``, N single-threaded Dask
+  worker processes, chunks sized automatically (``--chunk-spp K`` to fix
+  them instead), N = 1 and 2 by default.
 
 Overhead = time(local:N) / time(threads:N) - 1 (target <= 5 %); throughput
-per worker = samples / s / N. Run when the machine is quiet::
+per worker = samples / s / N. The CPU seconds of each whole process tree
+(client, scheduler, workers) are reported too: on a loaded machine they are
+a steadier measure of the work the cluster adds than wall time. Run when the
+machine is quiet::
 
-    python benchmarks/bench_cluster.py                       # ~60 s per render
-    python benchmarks/bench_cluster.py --spp 256 --rounds 5 --chunk-spp 16
-    python benchmarks/bench_cluster.py --json out/bench_cluster.json
+    python benchmarks/bench_cluster.py --calibrate           # the --spp of a ~60 s 2-thread render
+    python benchmarks/bench_cluster.py --spp 16384 --rounds 3 --json bench_cluster.json
+    python benchmarks/bench_cluster.py --spp 64 --rounds 3   # a quick end-to-end check
 
-The scene defaults to ``scenes/fgf-cube-pink.xml`` at ``-D res=128``; choose
-``--spp`` so that one threaded render with 2 threads takes about 60 s on the
-machine (``--calibrate`` prints the spp for that from a short render).
+The scene defaults to ``scenes/fgf-cube-pink.xml`` at ``-D res=128``.
 """
 
 from __future__ import annotations
@@ -30,6 +32,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import resource
 import statistics
 import subprocess
 import sys
@@ -40,24 +43,31 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 
 
-def run_once(scene: str, defines: list[str], spp: int, out: Path, extra: list[str]) -> float:
+def _children_cpu() -> float:
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+def run_once(scene: str, defines: list[str], spp: int, out: Path, extra: list[str]) -> tuple[float, float]:
+    """Wall and CPU seconds (all processes of the run) of one ``fgf render``."""
     cmd = [sys.executable, "-m", "fgf", "render", scene, "--spp", str(spp), "--seed", "1", "-o", str(out), "--quiet"]
     for d in defines:
         cmd += ["-D", d]
+    c0 = _children_cpu()
     t0 = time.perf_counter()
     r = subprocess.run(cmd + extra, capture_output=True, text=True)
     dt = time.perf_counter() - t0
     if r.returncode != 0:
         raise SystemExit(f"{' '.join(cmd + extra)} failed: {r.stderr.strip()}")
-    return dt
+    return dt, _children_cpu() - c0
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--scene", default=str(ROOT / "scenes" / "fgf-cube-pink.xml"))
     ap.add_argument("-D", dest="defines", action="append", default=None, help="scene define (default res=128)")
-    ap.add_argument("--spp", type=int, default=512)
-    ap.add_argument("--chunk-spp", type=int, default=16)
+    ap.add_argument("--spp", type=int, default=16384, help="samples per pixel (default 16384: ~60 s with 2 threads)")
+    ap.add_argument("--chunk-spp", type=int, default=None, help="fix the chunk size (default: automatic)")
     ap.add_argument("--workers", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--rounds", type=int, default=3)
     ap.add_argument("--calibrate", action="store_true", help="print the spp of a ~60 s 2-thread render and exit")
@@ -71,8 +81,8 @@ def main() -> int:
         if args.calibrate:
             # Two renders, so that the process start-up (most of a short
             # render) is not extrapolated as if it were rendering time.
-            t_lo = run_once(args.scene, defines, 16, t / "c.exr", ["--threads", "2"])
-            t_hi = run_once(args.scene, defines, 256, t / "c.exr", ["--threads", "2"])
+            t_lo = run_once(args.scene, defines, 16, t / "c.exr", ["--threads", "2"])[0]
+            t_hi = run_once(args.scene, defines, 256, t / "c.exr", ["--threads", "2"])[0]
             per_spp = max(t_hi - t_lo, 1e-3) / 240
             spp = max(16, round((60 - t_lo) / per_spp + 16))
             print(f"16 spp in {t_lo:.1f} s, 256 spp in {t_hi:.1f} s with 2 threads: use --spp {spp} for ~60 s")
@@ -80,36 +90,46 @@ def main() -> int:
         configs: list[tuple[str, list[str]]] = []
         for n in args.workers:
             configs.append((f"threads:{n}", ["--threads", str(n)]))
-            configs.append((f"local:{n}", ["--cluster", f"local:{n}", "--chunk-spp", str(args.chunk_spp)]))
+            chunks = [] if args.chunk_spp is None else ["--chunk-spp", str(args.chunk_spp)]
+            configs.append((f"local:{n}", ["--cluster", f"local:{n}", *chunks]))
         times: dict[str, list[float]] = {name: [] for name, _ in configs}
+        cpus: dict[str, list[float]] = {name: [] for name, _ in configs}
         reference = None
         for r in range(args.rounds):
             order = configs if r % 2 == 0 else configs[::-1]
             for name, extra in order:
                 out = t / f"{name.replace(':', '_')}.exr"
-                times[name].append(run_once(args.scene, defines, args.spp, out, extra))
+                wall, cpu = run_once(args.scene, defines, args.spp, out, extra)
+                times[name].append(wall)
+                cpus[name].append(cpu)
                 data = out.read_bytes()
                 if reference is None:
                     reference = data
                 elif data != reference:
                     raise SystemExit(f"{name}: the image differs from the first render (bit-identity broken)")
-                print(f"round {r + 1}: {name:10s} {times[name][-1]:7.1f} s", file=sys.stderr, flush=True)
+                print(f"round {r + 1}: {name:10s} {wall:7.1f} s wall {cpu:7.1f} s cpu", file=sys.stderr, flush=True)
     import fgf
 
     p = fgf._core.prepare_scene(args.scene, [tuple(d.split("=", 1)) for d in defines])
     samples = p.width * p.height * args.spp
     results = {"scene": args.scene, "defines": defines, "spp": args.spp, "chunk_spp": args.chunk_spp,
                "rounds": args.rounds, "cpu_count": os.cpu_count(), "load_avg": os.getloadavg(), "configs": {}}
-    print(f"{'config':10s} {'median s':>9s} {'Msamples/s':>11s} {'per worker':>11s} {'overhead':>9s}")
+    print(f"{'config':10s} {'median s':>9s} {'Msamples/s':>11s} {'per worker':>11s} {'overhead':>9s} "
+          f"{'cpu s':>8s} {'cpu over':>9s}")
     for n in args.workers:
         base = statistics.median(times[f"threads:{n}"])
+        base_cpu = statistics.median(cpus[f"threads:{n}"])
         for name in (f"threads:{n}", f"local:{n}"):
             med = statistics.median(times[name])
+            cpu = statistics.median(cpus[name])
             rate = samples / med / 1e6
             over = med / base - 1.0
             results["configs"][name] = {"times": times[name], "median": med, "msamples_per_s": rate,
-                                        "per_worker": rate / n, "overhead_vs_threads": over}
-            print(f"{name:10s} {med:9.1f} {rate:11.3f} {rate / n:11.3f} {100 * over:8.1f}%")
+                                        "per_worker": rate / n, "overhead_vs_threads": over,
+                                        "cpu_seconds": cpus[name], "cpu_median": cpu,
+                                        "cpu_overhead_vs_threads": cpu / base_cpu - 1.0}
+            print(f"{name:10s} {med:9.1f} {rate:11.3f} {rate / n:11.3f} {100 * over:8.1f}% "
+                  f"{cpu:8.1f} {100 * (cpu / base_cpu - 1.0):8.1f}%")
     if args.json:
         Path(args.json).write_text(json.dumps(results, indent=1))
     return 0

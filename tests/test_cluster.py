@@ -231,3 +231,159 @@ def test_sample_outside_the_exact_range_is_an_error_not_a_wrong_image(tmp_path):
     r = fgf_cli("render", str(scene), "-o", str(tmp_path / "b.exr"))
     assert r.returncode == 2 and "outside the exact accumulator's range" in r.stderr, r.stderr
     assert len(r.stderr.strip().splitlines()) == 1 and not (tmp_path / "b.exr").exists()
+
+
+def test_chunker_sizes_chunks_by_their_measured_time():
+    from fgf.cluster._chunks import Chunker
+
+    # 1000 pixels: before any timing, chunks are one pass of 2^18 samples.
+    c = Chunker([(0, 300), (310, 320)], spp=5000, pixels=1000, seconds=2.0)
+    first = c.take(slots=2)
+    assert first == (300, 310)  # the gap before the checkpoint's second range, cut short
+    assert c.take(slots=2) == (320, 320 + (1 << 18) // 1000)
+    # 0.5 s per 100 spp: a 2-s chunk is 400 spp.
+    c.observe(100, 0.5)
+    a, b = c.take(slots=2)
+    assert b - a == 400
+    # Near the end the rest is shared among the workers (two chunks each),
+    # down to a quarter of the target.
+    sizes = []
+    while (r := c.take(slots=2)) is not None:
+        sizes.append(r[1] - r[0])
+    assert sizes[:7] == [400] * 7 and sizes[7:11] == [305, 229, 171, 129]
+    assert min(sizes[:-1]) == 100 and sizes[-1] <= 100 and sum(sizes) == 5000 - 982
+    # An explicit chunk size wins; the ranges cover exactly what was missing.
+    fixed = Chunker([(4, 6)], spp=11, pixels=10, chunk_spp=3)
+    fixed.observe(3, 1.0)
+    got = []
+    while (r := fixed.take(slots=2)) is not None:
+        got.append(r)
+    assert got == [(0, 3), (3, 4), (6, 9), (9, 11)]
+
+
+def test_automatic_chunk_sizes_give_the_bits_of_fine_chunks_and_of_one_render(client, monkeypatch):
+    from fgf.cluster import _chunks
+
+    # Small probes and 10-ms chunks, so that this small film is cut into
+    # chunks of several sizes: probes of 2 spp, then sized by their time.
+    monkeypatch.setattr(_chunks, "PROBE_SAMPLES", 2 * 12 * 12)
+    monkeypatch.setattr(_chunks, "CHUNK_SECONDS", 0.01)
+    taken = []
+    take = _chunks.Chunker.take
+
+    def recording(self, slots=1):
+        r = take(self, slots)
+        if r is not None:
+            taken.append(r)
+        return r
+
+    monkeypatch.setattr(_chunks.Chunker, "take", recording)
+    spp, seed = 48, 13
+    auto = cluster.render(SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, client=client)
+    sizes = [b - a for a, b in taken]
+    assert sorted(taken)[0][0] == 0 and sum(sizes) == spp and len(set(sizes)) > 1, taken
+    taken.clear()
+    fine = cluster.render(
+        SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, client=client, chunk_spp=1
+    )
+    assert len(taken) == spp
+    img, var = reference(spp, seed)
+    for run in (auto, fine):
+        assert run.spp_done == spp and not run.interrupted
+        assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
+    # One machine, no cluster: the same chunking code, the same bits.
+    local = cluster.render(SCENE, spp=spp, seed=seed, defines=SMALL, progress=False, return_variance=True, threads=2)
+    assert np.array_equal(local.image, img) and np.array_equal(local.variance, var)
+
+
+def test_checkpoint_with_holes_resumes_with_automatic_chunks(tmp_path, client, monkeypatch):
+    # Chunks of different sizes finishing out of order leave a checkpoint
+    # with holes: here samples [0, 2) and [5, 9) of 20. Automatic chunks
+    # fill exactly the rest, and the image has the bits of one render.
+    from fgf.cluster import _chunks, _film
+    from fgf.cluster._ship import ScenePayload
+
+    monkeypatch.setattr(_chunks, "PROBE_SAMPLES", 12 * 12)
+    monkeypatch.setattr(_chunks, "CHUNK_SECONDS", 0.01)
+    prep = fgf._core.prepare_scene(str(SCENE), SMALL)
+    held = cluster.render_chunk(prep, 5, 9, seed=8, variance=True)
+    held.merge(cluster.render_chunk(prep, 0, 2, seed=8, variance=True))
+    assert held.ranges == [(0, 2), (5, 9)]
+    meta = {"kind": "render", "scene_digest": ScenePayload.from_file(SCENE, SMALL).digest, "seed": 8,
+            "variance": True, "width": 12, "height": 12}
+    ck = tmp_path / "holes.ckpt"
+    _film.save(ck, meta, {"sum": held.sum, "sum_sq": held.sum_sq, "ranges": np.array(held.ranges).reshape(-1, 2)})
+    run = cluster.render(SCENE, spp=20, seed=8, defines=SMALL, progress=False, return_variance=True, client=client,
+                         checkpoint=ck)
+    assert run.resumed_spp == 6 and run.spp_done == 20
+    img, var = reference(20, 8)
+    assert np.array_equal(run.image, img) and np.array_equal(run.variance, var)
+    _, arrays = _film.load(ck)
+    assert arrays["ranges"].tolist() == [[0, 20]]
+
+
+def test_local_cluster_stops_its_workers_without_leftovers():
+    with cluster.open_client("local:1") as c:
+        (pid,) = c.run(os.getpid).values()
+        (folder,) = c.run(lambda dask_worker: dask_worker.local_directory).values()
+    # The worker process is gone (killed, not restarted) and leaves no lock.
+    deadline = time.monotonic() + 10
+    while time.monotonic() < deadline:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            break
+        time.sleep(0.05)
+    else:
+        pytest.fail(f"worker process {pid} still running")
+    assert not os.path.exists(folder) and not os.path.exists(folder + ".dirlock")
+
+
+def test_scheduler_lost_mid_render_writes_what_finished(tmp_path):
+    # A scheduler and a worker of our own; the scheduler is killed once the
+    # checkpoint shows a finished chunk: one line, exit code 2, the image of
+    # the chunks finished, and a checkpoint that resumes to the full image.
+    import socket
+
+    with socket.socket() as s:
+        s.bind(("127.0.0.1", 0))
+        port = s.getsockname()[1]
+    address = f"tcp://127.0.0.1:{port}"
+    py = [sys.executable, "-m"]
+    # Their scratch folders (which a killed process leaves) go to tmp_path.
+    env = dict(os.environ, DASK_TEMPORARY_DIRECTORY=str(tmp_path))
+    procs = [subprocess.Popen(py + ["distributed.cli.dask_scheduler", "--port", str(port), "--no-dashboard"],
+                              stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL, env=env)]
+    ck, out = tmp_path / "lost.ckpt", tmp_path / "lost.exr"
+    try:
+        procs.append(subprocess.Popen(py + ["distributed.cli.dask_worker", address, "--nworkers", "1", "--nthreads",
+                                            "1", "--no-dashboard"], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                      env=env))
+        render = subprocess.Popen(
+            [sys.executable, "-m", "fgf", "render", str(SCENE), "-D", "res=16", "--spp", "200000", "--seed", "3",
+             "--cluster", address, "--checkpoint", str(ck), "-o", str(out), "--quiet"],
+            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+        )
+        procs.append(render)
+        deadline = time.monotonic() + 90
+        while not ck.exists() and render.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.1)
+        assert ck.exists(), "no chunk finished within 90 s"
+        procs[0].kill()
+        _, err = render.communicate(timeout=90)
+        assert render.returncode == 2, err
+        assert "lost the Dask scheduler" in err and len(err.strip().splitlines()) == 1, err
+        assert out.exists()
+        _, arrays = cluster._film.load(ck)
+        done = int(sum(b - a for a, b in arrays["ranges"].reshape(-1, 2)))
+        assert 0 < done < 200000
+    finally:
+        for p in procs:
+            if p.poll() is None:
+                p.kill()
+                p.wait(timeout=30)
+    # Resumed here (no cluster) to a few more samples: the bits of one render.
+    run = cluster.render(SCENE, spp=done + 3, seed=3, defines=[("res", "16")], progress=False, checkpoint=ck)
+    assert run.resumed_spp == done and run.spp_done == done + 3
+    img = fgf.render(SCENE, spp=done + 3, seed=3, defines={"res": 16}, progress=False)
+    assert np.array_equal(run.image, img)

@@ -137,7 +137,9 @@ def render(
         workers (``fgf.cluster``, ``docs/cluster.md``). The image has the
         same bits as without a client, for any chunk size and worker count.
     chunk_spp : int, optional
-        Samples per pixel of a chunk (default 16).
+        Samples per pixel of a chunk (default: chunks sized from the times
+        of those finished to take about ``fgf.cluster.CHUNK_SECONDS`` of
+        rendering each).
     checkpoint : path, optional
         Save the finished chunks there as they arrive (with or without a
         client); a rerun with the same arguments resumes from them, and

@@ -28,7 +28,7 @@ def add_cluster_options(p: argparse.ArgumentParser, chunks: bool = True) -> None
             type=int,
             default=None,
             metavar="K",
-            help="samples per pixel per work unit (default 16); does not change the image",
+            help="samples per pixel per work unit (default: sized so each takes about 2 s); does not change the image",
         )
     p.add_argument(
         "--checkpoint",

@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import math
 import os
 import signal
 import sys
@@ -41,14 +42,16 @@ import numpy.typing as npt
 from .. import _core
 from .._progress import Progress
 from . import _film
-from ._film import FilmSums, missing
+from ._chunks import CHUNK_SECONDS, Chunker
+from ._film import FilmSums
 from ._ship import ScenePayload, scene_files
-from ._tasks import Node, Realization, TaskError, ensemble_task, render_task, truth_task
+from ._tasks import Chunk, Node, Realization, TaskError, ensemble_task, render_task, truth_task
 
 if TYPE_CHECKING:
     from distributed import Client
 
 __all__ = [
+    "CHUNK_SECONDS",
     "ClusterError",
     "FilmSums",
     "ScenePayload",
@@ -64,11 +67,23 @@ __all__ = [
 ]
 
 F32 = npt.NDArray[np.float32]
-#: Default samples per pixel of a chunk: enough work per task that the
-#: scheduler's few milliseconds per task are negligible (docs/cluster.md).
-DEFAULT_CHUNK_SPP = 16
 #: Seconds to wait for a ``tcp://`` scheduler before giving up.
 CONNECT_TIMEOUT = 10.0
+#: Render chunks kept in flight per worker: the second one waits on the
+#: worker, so the worker never idles for a scheduler round trip.
+CHUNKS_AHEAD = 2
+#: Dask settings of a ``local[:N]`` cluster: its periodic bookkeeping (the
+#: statistical profiler every 10 ms, event-loop ticks every 20 ms, work
+#: stealing, system and memory monitors) cost 8.2 % of a core with nothing
+#: to do, 1.2 % with these (docs/cluster.md, "Cost model"). fgf's tasks
+#: need none of it: chunks are sized and handed out by the client.
+LOCAL_CLUSTER_CONFIG: dict[str, Any] = {
+    "distributed.worker.profile.enabled": False,
+    "distributed.admin.tick.interval": "500ms",
+    "distributed.admin.system-monitor.interval": "2s",
+    "distributed.scheduler.work-stealing": False,
+    "distributed.worker.memory.monitor-interval": "500ms",
+}
 
 
 class ClusterError(_core.FgfError):
@@ -88,6 +103,39 @@ def _distributed() -> Any:
             "(the dask[distributed] package)"
         ) from None
     return distributed
+
+
+def _stop_local(cluster: Any) -> None:
+    """Close a ``LocalCluster`` of ours, its worker processes stopped at once.
+
+    A graceful close asks each worker to finish and waits for it: about 1 s
+    at the end of every ``local`` run (docs/cluster.md, "Cost model"), for
+    nothing, since nothing in the workers is needed any more. So each nanny
+    is told not to restart its worker, the worker process is killed, the
+    cluster closed, and the lock file a killed worker leaves next to its
+    scratch folder (which the nanny removes) is removed too.
+    """
+    folders = []
+    # The scheduler logs the closed connections of the killed workers as
+    # errors, with tracebacks: expected here, so not shown.
+    log = logging.getLogger("distributed")
+    level = log.level
+    log.setLevel(logging.CRITICAL)
+    try:
+        for nanny in list(getattr(cluster, "workers", {}).values()):
+            with contextlib.suppress(Exception):
+                folders.append(nanny.worker_dir)
+                nanny.close_gracefully()  # Dask's "do not restart it" signal
+                pid = nanny.pid
+                if pid:
+                    os.kill(pid, signal.SIGKILL)
+        cluster.close()
+    finally:
+        log.setLevel(level)
+    for folder in folders:
+        if folder:
+            with contextlib.suppress(OSError):
+                os.unlink(f"{folder}.dirlock")
 
 
 @contextlib.contextmanager
@@ -111,6 +159,8 @@ def open_client(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator["Cli
         else:
             n = os.cpu_count() or 1
         distributed = _distributed()
+        import dask
+
         # The worker processes inherit an ignored SIGINT, so that Ctrl-C in a
         # terminal (sent to the whole process group) reaches only this
         # process, which cancels the futures and writes what finished.
@@ -118,22 +168,27 @@ def open_client(address: str, timeout: float = CONNECT_TIMEOUT) -> Iterator["Cli
         if previous is not None:
             signal.signal(signal.SIGINT, signal.SIG_IGN)
         try:
-            cluster = distributed.LocalCluster(
-                n_workers=n,
-                threads_per_worker=1,
-                processes=True,
-                dashboard_address=None,
-                silence_logs=logging.ERROR,
-            )
+            with dask.config.set(LOCAL_CLUSTER_CONFIG):
+                cluster = distributed.LocalCluster(
+                    n_workers=n,
+                    threads_per_worker=1,
+                    processes=True,
+                    dashboard_address=None,
+                    # No dashboard, and the scheduler's small HTTP server (health
+                    # checks) on a free port: two local runs at once would both
+                    # want 8787, and the second would print a warning.
+                    scheduler_kwargs={"dashboard_address": "127.0.0.1:0"},
+                    silence_logs=logging.ERROR,
+                )
+                client = distributed.Client(cluster)
         finally:
             if previous is not None:
                 signal.signal(signal.SIGINT, previous)
-        client = distributed.Client(cluster)
         try:
             yield client
         finally:
             client.close()
-            cluster.close()
+            _stop_local(cluster)
         return
     if not (address.startswith("tcp://") or address.startswith("tls://")) or ":" not in address[6:]:
         raise _core.ParameterError(
@@ -218,43 +273,87 @@ def _lost(address: str, e: BaseException) -> str:
     return f"lost the Dask scheduler{where} ({reason})"
 
 
+class _Workers:
+    """The number of workers of ``client``, asked of the scheduler at most
+    every 2 s (each question is a round trip)."""
+
+    def __init__(self, client: Any) -> None:
+        self.client = client
+        self.n = 1
+        self.when = -math.inf
+
+    def count(self) -> int:
+        now = time.monotonic()
+        if now - self.when >= 2.0:
+            self.n = max(1, len(self.client.scheduler_info().get("workers", {})))
+            self.when = now
+        return self.n
+
+
+def _listed(jobs: Sequence[tuple[Any, ...]]) -> Callable[[int], Optional[tuple[Any, ...]]]:
+    """``jobs`` handed out in order, as :func:`_run` asks for them."""
+    it = iter(jobs)
+    return lambda _slots: next(it, None)
+
+
 def _run(
     client: Any,
-    jobs: Sequence[tuple[Any, ...]],
+    next_job: Callable[[int], Optional[tuple[Any, ...]]],
     task: Callable[..., Any],
     shipped: Any,
     local: Callable[..., Any],
     on_result: Callable[[Any], bool],
+    ahead: Optional[int] = None,
 ) -> tuple[bool, Optional[str]]:
-    """Run ``jobs`` (argument tuples) locally in order, or as Dask tasks
-    ``task(shipped, *job)``; pass each result to ``on_result`` (which
-    returns ``False`` on an interrupted result). Returns ``(interrupted,
-    lost)``: Ctrl-C cancels what is left; a scheduler that disappears gives
-    ``lost``, a message. Task errors are re-raised here."""
+    """Run the jobs (argument tuples) that ``next_job(slots)`` hands out
+    (``None`` when there are no more; ``slots`` is the number of workers)
+    locally in order, or as Dask tasks ``task(shipped, *job)``; pass each
+    result to ``on_result`` (which returns ``False`` on an interrupted
+    result). With ``ahead``, at most ``ahead`` tasks per worker are in flight
+    and the next job is asked for as each result arrives (so that it can be
+    sized by the results so far); without, all are submitted at once.
+    Returns ``(interrupted, lost)``: Ctrl-C cancels what is left; a scheduler
+    that disappears gives ``lost``, a message. Task errors are re-raised here."""
     if client is None:
         try:
-            for job in jobs:
+            while (job := next_job(1)) is not None:
                 if not on_result(local(*job)):
                     return True, None
         except KeyboardInterrupt:
             return True, None
         return False, None
     distributed = _distributed()
-    futures: list[Any] = []
+    pending: set[Any] = set()
     try:
         payload = client.scatter(shipped, broadcast=True, hash=False)
-        futures = [client.submit(task, payload, *job, pure=False) for job in jobs]
-        for fut in distributed.as_completed(futures):
+        workers = _Workers(client)
+        arrived = distributed.as_completed()
+
+        def fill() -> None:
+            slots = workers.count() if ahead is not None else 1
+            while ahead is None or len(pending) < ahead * slots:
+                job = next_job(slots)
+                if job is None:
+                    return
+                fut = client.submit(task, payload, *job, pure=False)
+                pending.add(fut)
+                arrived.add(fut)
+
+        fill()
+        for fut in arrived:
+            pending.discard(fut)
             result = fut.result()
+            fut.release()  # the worker may drop its copy of the result now
             if isinstance(result, TaskError):
-                client.cancel(futures)
+                client.cancel(list(pending))
                 result.raise_()
             if not on_result(result):
-                client.cancel(futures)
+                client.cancel(list(pending))
                 return True, None
+            fill()
     except KeyboardInterrupt:
         with contextlib.suppress(Exception):
-            client.cancel(futures)
+            client.cancel(list(pending))
         return True, None
     except (OSError, TimeoutError, distributed.client.FutureCancelledError, distributed.comm.CommClosedError) as e:
         return False, _lost(str(getattr(getattr(client, "scheduler", None), "address", "") or ""), e)
@@ -315,8 +414,12 @@ def render(
     chunk_spp: Optional[int] = None,
     checkpoint: Optional[Union[str, os.PathLike[str]]] = None,
 ) -> RenderRun:
-    """Render ``scene`` in chunks of ``chunk_spp`` samples per pixel, on the
-    Dask ``client``'s workers or (``client=None``) here with ``threads``.
+    """Render ``scene`` in chunks of samples, on the Dask ``client``'s
+    workers or (``client=None``) here with ``threads``.
+
+    A chunk has ``chunk_spp`` samples per pixel if given; by default each
+    chunk is sized from the times of those finished to take about
+    :data:`CHUNK_SECONDS` of rendering (``fgf.cluster._chunks``).
 
     With ``checkpoint``, the finished chunks are saved there atomically as
     they arrive, and a rerun with the same arguments resumes from it (``spp``
@@ -332,7 +435,6 @@ def render(
     prep = _core.prepare_scene(path, defines)
     spp = prep.spp if spp is None else spp
     seed = prep.seed if seed is None else seed
-    chunk = chunk_spp or DEFAULT_CHUNK_SPP
     h, w = prep.height, prep.width
     payload = ScenePayload.from_file(path, defines) if (client is not None or checkpoint is not None) else None
     sums = FilmSums.empty(h, w, return_variance)
@@ -345,9 +447,9 @@ def render(
         "height": h,
     }
     ckpt = None if checkpoint is None else os.fspath(checkpoint)
-    if ckpt is not None and os.path.exists(ckpt):
-        found, arrays = _film.load(ckpt)
-        _film.check_meta(ckpt, found, meta)
+    found = _film.resume(ckpt, meta)
+    if found is not None:
+        arrays = found[1]
         ranges = [(int(a), int(b)) for a, b in arrays["ranges"].reshape(-1, 2)]
         sums = FilmSums(arrays["sum"].astype(np.uint64), arrays.get("sum_sq"), ranges)
         top = max((b for _, b in ranges), default=0)
@@ -356,8 +458,8 @@ def render(
                 f"{ckpt}: the checkpoint holds samples up to {top} per pixel; --spp {spp} must be at least that"
             )
     resumed = sums.samples
-    todo = missing(sums.ranges, spp, chunk)
-    bar = _Bar(progress, w * h * sum(b - a for a, b in todo), "render")
+    chunker = Chunker(sums.ranges, spp, w * h, chunk_spp)
+    bar = _Bar(progress, w * h * chunker.remaining, "render")
 
     def make() -> tuple[dict[str, Any], dict[str, Any]]:
         arrays: dict[str, Any] = {"sum": sums.sum, "ranges": np.array(sums.ranges, dtype=np.int64).reshape(-1, 2)}
@@ -367,30 +469,37 @@ def render(
 
     saver = _Saver(ckpt, make)
 
-    def local(s0: int, s1: int, *_: Any) -> FilmSums:
+    def next_job(slots: int) -> Optional[tuple[int, int, int, bool]]:
+        r = chunker.take(slots)
+        return None if r is None else (r[0], r[1], seed, return_variance)
+
+    def local(s0: int, s1: int, *_: Any) -> Chunk:
         base = bar.done
 
         def forward(done: int, total: int) -> None:
             bar.add(base + done - bar.done)
 
+        t0 = time.perf_counter()
         s, q, done, interrupted = _core.render_range(
             prep, s0, s1, seed=seed, variance=return_variance, threads=threads, progress=forward
         )
-        out = FilmSums(s, q, [(s0, s0 + done)] if done else [])
-        out.interrupted = interrupted  # type: ignore[attr-defined]
-        return out
+        return Chunk(FilmSums(s, q, [(s0, s0 + done)] if done else []), time.perf_counter() - t0, interrupted)
 
-    def on_result(part: FilmSums) -> bool:
-        if part.ranges:
-            sums.merge(part)
+    def on_result(part: Chunk) -> bool:
+        if part.sums.ranges:
+            sums.merge(part.sums)
+            chunker.observe(part.sums.samples, part.seconds)
             if client is not None:
-                bar.add(w * h * sum(b - a for a, b in part.ranges))
+                bar.add(w * h * part.sums.samples)
             saver.maybe()
-        return not getattr(part, "interrupted", False)
+        return not part.interrupted
 
     try:
-        jobs = [(a, b, seed, return_variance) for a, b in todo]
-        interrupted, lost = _run(client, jobs, render_task, payload, local, on_result) if jobs else (False, None)
+        interrupted, lost = (
+            _run(client, next_job, render_task, payload, local, on_result, ahead=CHUNKS_AHEAD)
+            if chunker.remaining
+            else (False, None)
+        )
     finally:
         bar.close()
     if ckpt is not None and sums.samples > resumed:
@@ -491,13 +600,10 @@ def ensemble(
         "padding": padding,
         "marginal": marginal,
     }
-    done: dict[int, Realization] = {}
     ckpt = None if checkpoint is None else os.fspath(checkpoint)
-    if ckpt is not None and os.path.exists(ckpt):
-        found, arrays = _film.load(ckpt)
-        _film.check_meta(ckpt, found, meta)
-        for key, info in found.get("infos", {}).items():
-            done[int(key)] = Realization(int(key), arrays[f"r{key}"], info)
+    done = _film.resume_items(
+        ckpt, meta, lambda i, found, arrays: Realization(i, arrays[f"r{i}"], found["infos"][str(i)])
+    )
     resumed = len(done)
     options: dict[str, Any] = {"resolution": resolution, "spp": spp, "seed": seed, "padding": padding, "marginal": marginal}
     todo = [(r, options) for r in range(realizations) if r not in done]
@@ -509,7 +615,7 @@ def ensemble(
     bar = _Bar(progress, per * len(todo), "ensemble")
 
     def make() -> tuple[dict[str, Any], dict[str, Any]]:
-        m = dict(meta, infos={str(r): x.info for r, x in done.items()})
+        m = dict(_film.items_meta(meta, done), infos={str(r): x.info for r, x in done.items()})
         return m, {f"r{r}": x.image for r, x in done.items()}
 
     saver = _Saver(ckpt, make)
@@ -532,7 +638,7 @@ def ensemble(
 
     try:
         interrupted, lost = (
-            _run(client, todo, ensemble_task, payload, local, on_result) if todo else (False, None)
+            _run(client, _listed(todo), ensemble_task, payload, local, on_result) if todo else (False, None)
         )
     finally:
         bar.close()
@@ -587,13 +693,8 @@ def truth_nodes(
         "nodes": nodes,
         "variance": return_variance,
     }
-    done: dict[int, Node] = {}
     ckpt = None if checkpoint is None else os.fspath(checkpoint)
-    if ckpt is not None and os.path.exists(ckpt):
-        found, arrays = _film.load(ckpt)
-        _film.check_meta(ckpt, found, meta)
-        for key in found.get("done", []):
-            done[int(key)] = Node(int(key), arrays[f"n{key}"], arrays.get(f"v{key}"))
+    done = _film.resume_items(ckpt, meta, lambda i, _found, arrays: Node(i, arrays[f"n{i}"], arrays.get(f"v{i}")))
     resumed = len(done)
     todo = [(i, nodes, spp, seed, return_variance) for i in range(nodes) if i not in done]
     prep = _core.prepare_scene(path, defines)
@@ -603,7 +704,7 @@ def truth_nodes(
     def make() -> tuple[dict[str, Any], dict[str, Any]]:
         arrays: dict[str, Any] = {f"n{i}": x.image for i, x in done.items()}
         arrays.update({f"v{i}": x.variance for i, x in done.items() if x.variance is not None})
-        return dict(meta, done=sorted(done)), arrays
+        return _film.items_meta(meta, done), arrays
 
     saver = _Saver(ckpt, make)
 
@@ -625,7 +726,9 @@ def truth_nodes(
         return True
 
     try:
-        interrupted, lost = _run(client, todo, truth_task, payload, local, on_result) if todo else (False, None)
+        interrupted, lost = (
+            _run(client, _listed(todo), truth_task, payload, local, on_result) if todo else (False, None)
+        )
     finally:
         bar.close()
     if ckpt is not None and len(done) > resumed:

@@ -12,7 +12,7 @@ import io
 import json
 import os
 from dataclasses import dataclass, field
-from typing import Any, Optional
+from typing import Any, Callable, Optional, TypeVar
 
 import numpy as np
 import numpy.typing as npt
@@ -22,6 +22,7 @@ from .. import _atomic, _core
 U64 = npt.NDArray[np.uint64]
 F32 = npt.NDArray[np.float32]
 CHECKPOINT_FORMAT = "fgf-checkpoint-1"
+T = TypeVar("T")
 
 
 def _union(ranges: list[tuple[int, int]]) -> list[tuple[int, int]]:
@@ -130,3 +131,36 @@ def check_meta(path: str | os.PathLike[str], found: dict[str, Any], expected: di
                 f"{path}: checkpoint made with a different {what} ({got!r}, this run has {want!r}); "
                 "refusing to mix them: rerun with the original arguments, or remove the checkpoint"
             )
+
+
+def resume(path: Optional[str], meta: dict[str, Any]) -> Optional[tuple[dict[str, Any], dict[str, npt.NDArray[Any]]]]:
+    """The checkpoint at ``path`` (its meta and arrays), or ``None`` if there is
+    none yet; ``fgf.ParameterError`` if it was made with other settings than
+    ``meta``'s (:func:`check_meta`)."""
+    if path is None or not os.path.exists(path):
+        return None
+    found, arrays = load(path)
+    check_meta(path, found, meta)
+    return found, arrays
+
+
+def resume_items(
+    path: Optional[str],
+    meta: dict[str, Any],
+    restore: Callable[[int, dict[str, Any], dict[str, npt.NDArray[Any]]], T],
+) -> dict[int, T]:
+    """The finished items (ensemble realizations, truth nodes) of the checkpoint
+    at ``path``, by index; empty without one. A checkpoint lists its finished
+    indices under ``"done"`` (:func:`items_meta`); ``restore(index, meta,
+    arrays)`` rebuilds one item from the file."""
+    found = resume(path, meta)
+    if found is None:
+        return {}
+    meta_found, arrays = found
+    return {int(i): restore(int(i), meta_found, arrays) for i in meta_found.get("done", [])}
+
+
+def items_meta(meta: dict[str, Any], done: dict[int, Any]) -> dict[str, Any]:
+    """``meta`` with the sorted indices of the finished items, as
+    :func:`resume_items` reads them."""
+    return dict(meta, done=sorted(done))

@@ -11,6 +11,8 @@ import contextlib
 import os
 import shutil
 import tempfile
+import threading
+import time
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Iterator, Optional, Union
@@ -57,16 +59,34 @@ def worker_threads() -> Optional[int]:
         return None
 
 
-def render_task(
-    payload: ScenePayload, s0: int, s1: int, seed: int, variance: bool
-) -> Union[FilmSums, TaskError]:
+@dataclass
+class Chunk:
+    """A rendered chunk: its exact sums and the seconds its render took on
+    the worker (what the client sizes later chunks by, ``_chunks.py``)."""
+
+    sums: FilmSums
+    seconds: float
+    #: Ctrl-C stopped it before its last sample (a render on this machine).
+    interrupted: bool = False
+
+
+# One render at a time per worker process: a render uses all the worker's
+# threads, and a second chunk sent ahead waits here, ready to start the
+# moment the first ends (no scheduler round trip between them).
+_render_lock = threading.Lock()
+
+
+def render_task(payload: ScenePayload, s0: int, s1: int, seed: int, variance: bool) -> Union[Chunk, TaskError]:
     """The exact sums of samples ``[s0, s1)`` of the shipped scene."""
     try:
         scene = prepared(payload)
-        s, q, done, _ = _core.render_range(scene, s0, s1, seed=seed, variance=variance, threads=worker_threads())
+        with _render_lock:
+            t0 = time.perf_counter()
+            s, q, done, _ = _core.render_range(scene, s0, s1, seed=seed, variance=variance, threads=worker_threads())
+            seconds = time.perf_counter() - t0
     except (_core.FgfError, OSError) as e:
         return _as_task_error(e)
-    return FilmSums(s, q, [(s0, s0 + done)])
+    return Chunk(FilmSums(s, q, [(s0, s0 + done)]), seconds)
 
 
 @contextlib.contextmanager
