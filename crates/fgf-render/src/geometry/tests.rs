@@ -38,6 +38,7 @@ fn triangle_soup(s: &mut crate::math::Sampler, n: u32, size: f32) -> Arc<Triangl
     Arc::new(TriangleMesh {
         positions,
         normals: None,
+        texcoords: None,
         indices,
     })
 }

@@ -4,7 +4,7 @@ use super::{finish, read_file};
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::xml::document::XNode;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -32,6 +32,8 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut all_normals = true;
+    let mut texcoords = Vec::new();
+    let mut all_texcoords = true;
     let mut indices = Vec::new();
     // tobj numbers the vertices of each `o`/`g` group separately, while
     // Mitsuba shares one `v/vt/vn` vertex across groups (it matters for the
@@ -47,6 +49,7 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
         let has_n = mesh.normals.len() == mesh.positions.len();
         let has_tc = mesh.texcoords.len() == 2 * nv;
         all_normals &= has_n;
+        all_texcoords &= has_tc;
         let mut ids = Vec::with_capacity(nv);
         let mut mine: Vec<(Key, u32)> = Vec::with_capacity(nv);
         for i in 0..nv {
@@ -73,6 +76,8 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
                         .map_err(|_| fmt("more than 2^32 vertices".into()))?;
                     positions.push(p);
                     normals.push(n);
+                    // Mitsuba 3 flips v: an image's top row is v = 0.
+                    texcoords.push(Vec2::new(tc[0], 1.0 - tc[1]));
                     mine.push((key, id));
                     id
                 }
@@ -95,6 +100,7 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
     finish(
         positions,
         (all_normals && !normals.is_empty()).then_some(normals),
+        (all_texcoords && !texcoords.is_empty()).then_some(texcoords),
         indices,
     )
     .map_err(fmt)
@@ -117,7 +123,11 @@ fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
         "vn" => Some(2),
         _ => None,
     };
-    let lines = || bytes.split(|&b| b == b'\n').map(|l| std::str::from_utf8(l).unwrap_or(""));
+    let lines = || {
+        bytes
+            .split(|&b| b == b'\n')
+            .map(|l| std::str::from_utf8(l).unwrap_or(""))
+    };
     let mut total = [0i64; 3];
     for line in lines() {
         if let Some(k) = line.split_whitespace().next().and_then(kind_of) {
@@ -140,7 +150,11 @@ fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
         for word in words {
             for (k, part) in word.split('/').take(3).enumerate() {
                 let Ok(x) = part.parse::<i64>() else { continue };
-                let ok = if x > 0 { x <= total[k] } else { x < 0 && x >= -so_far[k] };
+                let ok = if x > 0 {
+                    x <= total[k]
+                } else {
+                    x < 0 && x >= -so_far[k]
+                };
                 if !ok {
                     let have = if x > 0 { total[k] } else { so_far[k] };
                     return Err(format!(
@@ -165,8 +179,14 @@ mod tests {
         assert!(check_face_indices(ok).is_ok());
         for (obj, line) in [
             (&b"v 0 0 0\nf 1 2 3\n"[..], "line 2"),
-            (b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvt 0 0\nf 1/1 2/1 3/-9223372036854775808\n", "line 5"),
-            (b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvn 0 0 1\nf 1//1 2//1 3//6148914691236517206\n", "line 5"),
+            (
+                b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvt 0 0\nf 1/1 2/1 3/-9223372036854775808\n",
+                "line 5",
+            ),
+            (
+                b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvn 0 0 1\nf 1//1 2//1 3//6148914691236517206\n",
+                "line 5",
+            ),
             (b"v 0 0 0\nf 0 1 1\n", "line 2"),
             (b"f -1 -1 -1\nv 0 0 0\n", "line 1"),
         ] {

@@ -4,7 +4,7 @@ use super::{finish, read_file};
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::xml::document::XNode;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 pub(crate) fn load_ply(fnode: &XNode, path: &Path) -> Result<TriangleMesh, SceneError> {
@@ -244,6 +244,7 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
     };
     let mut positions: Option<Vec<Vec3>> = None;
     let mut normals: Option<Vec<Vec3>> = None;
+    let mut texcoords: Option<Vec<Vec2>> = None;
     let mut indices: Option<Vec<[u32; 3]>> = None;
     for el in &elements {
         // Refuse counts the rest of the file cannot hold before allocating.
@@ -280,6 +281,11 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
                     return Err("the 'vertex' element lacks x, y or z".into());
                 }
                 let has_n = nxyz.iter().all(|i| i.is_some());
+                // Mitsuba's names for texture coordinates, in its order.
+                let uv = [("u", "v"), ("s", "t"), ("texture_u", "texture_v")]
+                    .iter()
+                    .find_map(|(a, b)| Some([find(a)?, find(b)?]));
+                let mut ts = Vec::with_capacity(if uv.is_some() { el.count } else { 0 });
                 let mut ps = Vec::with_capacity(el.count);
                 let mut ns = Vec::with_capacity(if has_n { el.count } else { 0 });
                 let mut vals = vec![0f64; el.props.len()];
@@ -300,9 +306,13 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
                     if has_n {
                         ns.push(Vec3::new(g(nxyz[0]), g(nxyz[1]), g(nxyz[2])));
                     }
+                    if let Some([iu, iv]) = uv {
+                        ts.push(Vec2::new(vals[iu] as f32, vals[iv] as f32));
+                    }
                 }
                 positions = Some(ps);
                 normals = has_n.then_some(ns);
+                texcoords = uv.map(|_| ts);
             }
             "face" => {
                 if indices.is_some() {
@@ -371,7 +381,7 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
     }
     let positions = positions.ok_or("no 'vertex' element")?;
     let indices = indices.ok_or("no 'face' element")?;
-    finish(positions, normals, indices)
+    finish(positions, normals, texcoords, indices)
 }
 
 #[cfg(test)]
