@@ -1,6 +1,8 @@
 //! Image output: linear float32 EXR (scanline layout, readable by every
 //! viewer and by Mitsuba's `Bitmap`) and 8-bit PNG previews
-//! (exposure, then clamp, then the sRGB transfer curve).
+//! (exposure, then clamp, then the sRGB transfer curve). Input: EXR,
+//! Radiance HDR and PNG to RGB floats, for `envmap` and `bitmap`, each
+//! refusing more than [`MAX_IMAGE_PIXELS`] before allocating.
 //!
 //! Pixel buffers are row-major from the top-left corner, interleaved
 //! channels: index `(y * width + x) * channels + c`.

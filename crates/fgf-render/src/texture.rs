@@ -117,13 +117,29 @@ impl Texture {
         }
     }
 
-    /// Mitsuba's `eval_1`, a scalar parameter such as a roughness: the mean
-    /// of a checkerboard colour's channels, the luminance of a bitmap's value.
+    /// Mitsuba's `eval_1`, a scalar parameter such as a roughness: the
+    /// luminance of a bitmap's value; for a checkerboard the mean of a
+    /// colour's channels, where Mitsuba 3.9.1's `eval_1` takes the *other*
+    /// colour than `eval` (`color1` where `eval` gives `color0`, checked
+    /// against the `mitsuba` package), which fgf follows so that textured
+    /// roughness renders as in Mitsuba.
     pub fn eval_1(&self, uv: Vec2) -> f32 {
-        let c = self.eval(uv);
         match self {
-            Texture::Checkerboard { .. } => (c.x + c.y + c.z) / 3.0,
-            Texture::Bitmap { .. } => luminance(&c.to_array()),
+            Texture::Checkerboard {
+                color0,
+                color1,
+                to_uv,
+            } => {
+                let q = to_uv.transform_point2(uv);
+                let f = q - q.floor();
+                let c = if (f.x > 0.5) == (f.y > 0.5) {
+                    color1
+                } else {
+                    color0
+                };
+                (c.x + c.y + c.z) / 3.0
+            }
+            Texture::Bitmap { .. } => luminance(&self.eval(uv).to_array()),
         }
     }
 }
@@ -246,5 +262,16 @@ mod tests {
             assert_eq!(t.eval(Vec2::new(u, v)).z, 1.0, "({u}, {v})");
         }
         assert!((t.eval_1(Vec2::new(0.3, 0.1)) - 1.0 / 3.0).abs() < 1e-6);
+        // eval_1 takes the other colour, as Mitsuba 3.9.1's does (values
+        // from the `mitsuba` package for color0 = 0.03, color1 = 0.6).
+        let t = Texture::Checkerboard {
+            color0: Spectrum::splat(0.03),
+            color1: Spectrum::splat(0.6),
+            to_uv: Affine2::from_scale(Vec2::new(3.0, 2.0)),
+        };
+        for (uv, e, e1) in [((0.05, 0.1), 0.03, 0.6), ((0.25, 0.1), 0.6, 0.03)] {
+            let uv = Vec2::new(uv.0, uv.1);
+            assert!((t.eval(uv).x - e).abs() < 1e-6 && (t.eval_1(uv) - e1).abs() < 1e-6);
+        }
     }
 }

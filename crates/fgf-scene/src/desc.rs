@@ -274,7 +274,8 @@ pub enum TexturedParam {
     SpecularReflectance,
     SpecularTransmittance,
     /// A rough BSDF's `alpha` (Mitsuba's `eval_1`: the mean of a
-    /// checkerboard colour's channels, the luminance of a bitmap's value).
+    /// checkerboard colour's channels, with the colours' roles swapped as
+    /// Mitsuba 3.9.1 swaps them; the luminance of a bitmap's value).
     Alpha,
 }
 

@@ -7,29 +7,31 @@
 //! both sides). `roughplastic` is refused for now: its diffuse lobe is 7 %
 //! brighter than Mitsuba 3.9.1's at grazing incidence. The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
-//! (Heitz 2018) unless `sample_visible` is false. Textures as parameters,
-//! anisotropic roughness, `mask` and `principled` are refused with a
+//! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
+//! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
+//! where Mitsuba 3 allows one (which parameters, and how: [`super::textures`]).
+//! Anisotropic roughness, `mask` and `principled` are refused with a
 //! message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
 //! | plugin | parameter | type | units | range | default | meaning |
 //! |---|---|---|---|---|---|---|
-//! | `diffuse` | `reflectance` | float or rgb | – | in [0, 1] | 0.5 | |
+//! | `diffuse` | `reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | |
 //! | `dielectric` | `int_ior`, `ext_ior` | float or string | – | a number > 0 or a name of Mitsuba's table (`"water"`, `"bk7"`, `"diamond"`, ...) | `"bk7"` (1.5046), `"air"` (1.000277) | index of refraction inside and outside |
-//! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float or rgb | – | in [0, 1] | 1, 1 | |
+//! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float, rgb or texture | – | in [0, 1] | 1, 1 | |
 //! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
 //! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
-//! | `conductor` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | |
+//! | `conductor` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | |
 //! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | reflectance `2R/(1+R)` of the two faces; the rest is transmitted undeviated |
 //! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
 //! | `roughconductor` | `material`, `eta`, `k`, `specular_reflectance` | as `conductor` | | | as `conductor` | |
 //! | rough plugins | `distribution` | string | – | `"beckmann"`, `"ggx"` | `"beckmann"` | microfacet normal distribution |
-//! | rough plugins | `alpha` | float | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
+//! | rough plugins | `alpha` | float, or texture (`roughconductor`, `roughdielectric`) | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
 //! | rough plugins | `sample_visible` | boolean | – | – | true | sample only the normals visible from the incident direction |
 //! | `plastic`, `roughplastic` | `int_ior`, `ext_ior` | float or string | – | as `dielectric`, not equal | `"polypropylene"` (1.49), `"air"` | the coating's indices |
-//! | `plastic`, `roughplastic` | `diffuse_reflectance` | float or rgb | – | in [0, 1] | 0.5 | the base |
-//! | `plastic`, `roughplastic` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | scales the coating's reflection |
+//! | `plastic`, `roughplastic` | `diffuse_reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | the base |
+//! | `plastic`, `roughplastic` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | scales the coating's reflection |
 //! | `plastic`, `roughplastic` | `nonlinear` | boolean | – | – | false | account for the colour shift of internal scattering (`ρ/(1 - ρ F_int)` instead of `ρ/(1 - F_int)`) |
 //! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
 //!

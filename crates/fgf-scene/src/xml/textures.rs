@@ -20,7 +20,8 @@
 //! `specular_transmittance` of the dielectrics; `eta` and `k` of the
 //! conductors; `plastic`'s `diffuse_reflectance`; and `alpha` of
 //! `roughconductor` and `roughdielectric` (the roughness is then the mean of
-//! a checkerboard colour's channels, or the luminance of a bitmap's value;
+//! a checkerboard colour's channels — of `color1` where the colour would be
+//! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
 //! parameter's range everywhere (reflectances in [0, 1]). fgf refuses, in
 //! one line naming the feature: a texture as an area emitter's `radiance`

@@ -433,6 +433,23 @@ mod tests {
         }
     }
 
+    /// Mitsuba's three names for texture coordinates are read as written.
+    #[test]
+    fn texture_coordinates_under_each_name() {
+        for (a, b) in [("u", "v"), ("s", "t"), ("texture_u", "texture_v")] {
+            let ply = format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float {a}\nproperty float {b}\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0.1 0.2\n1 0 0 0.9 0.3\n0 1 0 0.2 0.7\n3 0 1 2\n"
+            );
+            let m = parse_ply(ply.as_bytes()).unwrap();
+            let t = m.texcoords.expect("texture coordinates");
+            assert_eq!(t[1], Vec2::new(0.9, 0.3), "{a}, {b}");
+        }
+        assert!(parse_ply(SQUARE_ASCII.as_bytes())
+            .unwrap()
+            .texcoords
+            .is_none());
+    }
+
     #[test]
     fn hostile_counts_and_truncation_are_errors() {
         let huge = SQUARE_ASCII.replace("element vertex 4", "element vertex 4000000000000");
