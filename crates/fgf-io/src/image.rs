@@ -1,6 +1,8 @@
 //! Image output: linear float32 EXR (scanline layout, readable by every
 //! viewer and by Mitsuba's `Bitmap`) and 8-bit PNG previews
-//! (exposure, then clamp, then the sRGB transfer curve).
+//! (exposure, then clamp, then the sRGB transfer curve). Input: EXR,
+//! Radiance HDR and PNG to RGB floats, for `envmap` and `bitmap`, each
+//! refusing more than [`MAX_IMAGE_PIXELS`] before allocating.
 //!
 //! Pixel buffers are row-major from the top-left corner, interleaved
 //! channels: index `(y * width + x) * channels + c`.
@@ -81,10 +83,34 @@ pub fn write_exr(
     })
 }
 
-/// Read an RGB(A) EXR into `(width, height, rgb data)`; used by tests and
-/// by users comparing images.
+/// The largest image the readers accept, in pixels (2^25: 384 MiB of RGB
+/// floats). A file's header declaring more is refused before any pixel
+/// buffer is allocated.
+pub const MAX_IMAGE_PIXELS: usize = 1 << 25;
+
+fn check_image_size(path: &Path, width: usize, height: usize) -> Result<()> {
+    match width.checked_mul(height) {
+        Some(n) if n > 0 && n <= MAX_IMAGE_PIXELS => Ok(()),
+        _ => Err(IoError::format(
+            path,
+            format!(
+                "image of {width}x{height} pixels: valid sizes have 1 to {MAX_IMAGE_PIXELS} pixels"
+            ),
+        )),
+    }
+}
+
+/// Read an RGB(A) EXR into `(width, height, rgb data)` (linear floats, rows
+/// from the top); used by the `envmap` and `bitmap` plugins, by tests and
+/// by users comparing images. Its declared size is checked against
+/// [`MAX_IMAGE_PIXELS`] before the pixels are read.
 pub fn read_exr_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
     use exr::prelude::*;
+    let meta = exr::meta::MetaData::read_from_file(path, false)
+        .map_err(|e| IoError::format(path, e.to_string()))?;
+    for h in meta.headers.iter() {
+        check_image_size(path, h.layer_size.width(), h.layer_size.height())?;
+    }
     let image = read_first_rgba_layer_from_file(
         path,
         |res: Vec2<usize>, _| (res.width(), vec![0f32; res.width() * res.height() * 3]),
@@ -167,6 +193,68 @@ pub fn write_png_preview(
     write_png8(path, width, height, channels, &to_srgb8(data, exposure))
 }
 
+/// Read a PNG (grey, grey-alpha, RGB, RGBA, palette; 1 to 16 bits) into
+/// `(width, height, rgb data)` with values in [0, 1] as stored (still
+/// encoded by the file's transfer curve: the caller decides whether to
+/// linearise). Alpha is dropped. The size is checked against
+/// [`MAX_IMAGE_PIXELS`] before the pixels are read.
+pub fn read_png_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
+    let fmt = |e: png::DecodingError| IoError::format(path, format!("not a readable PNG: {e}"));
+    let file = crate::read_regular(path).map_err(|e| IoError::format(path, e.to_string()))?;
+    let limits = png::Limits {
+        bytes: MAX_IMAGE_PIXELS * 8,
+    };
+    let mut dec = png::Decoder::new_with_limits(std::io::Cursor::new(&file[..]), limits);
+    dec.set_transformations(png::Transformations::EXPAND);
+    let mut reader = dec.read_info().map_err(fmt)?;
+    let (w, h) = {
+        let info = reader.info();
+        (info.width as usize, info.height as usize)
+    };
+    check_image_size(path, w, h)?;
+    let size = reader
+        .output_buffer_size()
+        .ok_or_else(|| IoError::format(path, "PNG too large"))?;
+    let mut buf = vec![0u8; size];
+    let out = reader.next_frame(&mut buf).map_err(fmt)?;
+    let channels = out.color_type.samples();
+    let sixteen = out.bit_depth == png::BitDepth::Sixteen;
+    let (max, bytes) = if sixteen { (65535.0, 2) } else { (255.0, 1) };
+    let line = out.line_size;
+    let mut data = Vec::with_capacity(w * h * 3);
+    for y in 0..h {
+        let row = &buf[y * line..];
+        for x in 0..w {
+            let sample = |c: usize| -> f32 {
+                let i = (x * channels + c) * bytes;
+                let v = if sixteen {
+                    u16::from_be_bytes([row[i], row[i + 1]]) as f32
+                } else {
+                    row[i] as f32
+                };
+                v / max
+            };
+            if channels >= 3 {
+                data.extend([sample(0), sample(1), sample(2)]);
+            } else {
+                let g = sample(0);
+                data.extend([g, g, g]);
+            }
+        }
+    }
+    Ok((w, h, data))
+}
+
+/// The sRGB transfer curve inverted: an encoded value in [0, 1] to linear.
+#[inline]
+pub fn srgb_decode(v: f32) -> f32 {
+    if v <= 0.04045 {
+        v / 12.92
+    } else {
+        ((v + 0.055) / 1.055).powf(2.4)
+    }
+}
+
 /// Read a Radiance `.hdr` (RGBE) image: flat or new-style run-length
 /// encoded scanlines, `-Y h +X w` orientation (the common one). Returns
 /// `(width, height, rgb)` with rows from the top, linear floats.
@@ -207,6 +295,7 @@ pub fn read_hdr_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
         (Ok(h), Ok(w)) if h > 0 && w > 0 && h <= 1 << 15 && w <= 1 << 15 => (h, w),
         _ => return Err(bad("bad image size")),
     };
+    check_image_size(path, w, h)?;
     let mut data = vec![0f32; w * h * 3];
     let mut p = pos;
     let mut scan = vec![[0u8; 4]; w];

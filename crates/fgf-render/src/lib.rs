@@ -13,7 +13,7 @@
 //!   [`world`] (the scene compiled for rendering), [`integrator`]
 //!   (volumetric path tracing), [`medium`] (the medium interface,
 //!   homogeneous, grid and non-exponential media), [`geometry`] (shapes,
-//!   BVH), [`ray`], [`bsdf`], [`emitter`], [`phase`], [`camera`],
+//!   BVH, texture coordinates), [`ray`], [`bsdf`], [`texture`], [`emitter`], [`phase`], [`camera`],
 //!   [`spectrum`] (the colour type), [`math`].
 //! * [`ensemble`]: ground truth from explicit realizations of `fgf` media.
 //! * [`truth`]: exact ground truth for constant-α media by quadrature over
@@ -37,6 +37,7 @@ pub mod phase;
 pub mod ray;
 pub mod render;
 pub mod spectrum;
+pub mod texture;
 pub mod truth;
 pub mod world;
 

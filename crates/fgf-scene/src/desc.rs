@@ -125,6 +125,11 @@ pub struct TriangleMesh {
     /// Per-vertex normals: the file's, else smooth normals computed by the
     /// loader as Mitsuba does; `None` with `face_normals=true`.
     pub normals: Option<Vec<Vec3>>,
+    /// Per-vertex texture coordinates `(u, v)` as Mitsuba 3 stores them
+    /// (an OBJ's `vt` with `v` turned into `1 - v`; PLY and `serialized`
+    /// as written); `None` if the file has none, and then a triangle's
+    /// texture coordinates are its barycentrics, as in Mitsuba.
+    pub texcoords: Option<Vec<glam::Vec2>>,
     pub indices: Vec<[u32; 3]>,
 }
 
@@ -237,6 +242,16 @@ pub enum BsdfDesc {
         specular_transmittance: Rgb,
         microfacet: MicrofacetDesc,
     },
+    /// A BSDF some of whose parameters are textures (`xml::textures`):
+    /// `base` holds each textured parameter's mean (what Mitsuba's
+    /// `plastic` uses for its lobe-sampling weight), and at a surface point
+    /// each parameter of `textures` takes the texture's value there.
+    /// `base` is never `Textured` or `TwoSided` (a `twosided` BSDF wraps
+    /// the `Textured` one).
+    Textured {
+        base: Box<BsdfDesc>,
+        textures: Vec<(TexturedParam, TextureDesc)>,
+    },
     /// `plastic` (`microfacet: None`) and `roughplastic` (isotropic
     /// distribution): a diffuse base under a dielectric coating.
     Plastic {
@@ -247,6 +262,100 @@ pub enum BsdfDesc {
         nonlinear: bool,
         microfacet: Option<MicrofacetDesc>,
     },
+}
+
+/// The BSDF parameters a texture may give (as in Mitsuba 3.9).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TexturedParam {
+    /// `diffuse`'s `reflectance`.
+    Reflectance,
+    /// `plastic`'s `diffuse_reflectance`.
+    DiffuseReflectance,
+    SpecularReflectance,
+    SpecularTransmittance,
+    /// A rough BSDF's `alpha` (Mitsuba's `eval_1`: the mean of a
+    /// checkerboard colour's channels, with the colours' roles swapped as
+    /// Mitsuba 3.9.1 swaps them; the luminance of a bitmap's value).
+    Alpha,
+}
+
+/// A 2D texture, looked up at a surface point's texture coordinates after
+/// `to_uv` (the upper-left 2×2 block and translation of the XML's 4×4
+/// `to_uv`, as Mitsuba reads it).
+#[derive(Debug, Clone, PartialEq)]
+pub enum TextureDesc {
+    /// `checkerboard`: `color0` where the fractional parts of `u` and `v`
+    /// are both below or both above 1/2, else `color1`.
+    Checkerboard {
+        color0: Rgb,
+        color1: Rgb,
+        to_uv: glam::Affine2,
+    },
+    /// `bitmap`: an image (linear RGB), `v = 0` at its top row.
+    Bitmap {
+        image: Arc<RgbImage>,
+        filter: BitmapFilter,
+        wrap: WrapMode,
+        to_uv: glam::Affine2,
+    },
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BitmapFilter {
+    Bilinear,
+    Nearest,
+}
+
+/// What a bitmap lookup does outside `[0, 1)²`.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum WrapMode {
+    Repeat,
+    Mirror,
+    Clamp,
+}
+
+impl TextureDesc {
+    /// Mitsuba's `Texture::mean`: the mean of the two colours' channel
+    /// means for a checkerboard, the mean luminance of a bitmap's pixels.
+    pub fn mean(&self) -> f32 {
+        match self {
+            TextureDesc::Checkerboard { color0, color1, .. } => {
+                let m = |c: &Rgb| (c[0] + c[1] + c[2]) / 3.0;
+                0.5 * (m(color0) + m(color1))
+            }
+            TextureDesc::Bitmap { image, .. } => {
+                let n = image.width * image.height;
+                let sum: f64 = image
+                    .data
+                    .chunks_exact(3)
+                    .map(|c| luminance(c) as f64)
+                    .sum();
+                if n == 0 {
+                    0.0
+                } else {
+                    (sum / n as f64) as f32
+                }
+            }
+        }
+    }
+
+    /// The smallest and largest channel value the texture can return.
+    pub fn range(&self) -> (f32, f32) {
+        let vals: Box<dyn Iterator<Item = f32> + '_> = match self {
+            TextureDesc::Checkerboard { color0, color1, .. } => {
+                Box::new(color0.iter().chain(color1.iter()).copied())
+            }
+            TextureDesc::Bitmap { image, .. } => Box::new(image.data.iter().copied()),
+        };
+        vals.fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), v| {
+            (lo.min(v), hi.max(v))
+        })
+    }
+}
+
+/// The luminance of a linear sRGB colour (Rec. 709 weights, as Mitsuba).
+pub fn luminance(c: &[f32]) -> f32 {
+    0.212671 * c[0] + 0.715160 * c[1] + 0.072169 * c[2]
 }
 
 /// Mitsuba's `distribution` of a rough BSDF.

@@ -179,6 +179,8 @@ pub(crate) enum MeshProblem {
     Index([u32; 3], usize),
     NormalCount(usize, usize),
     Normal(usize),
+    TexcoordCount(usize, usize),
+    Texcoord(usize),
 }
 
 impl Display for MeshProblem {
@@ -194,6 +196,10 @@ impl Display for MeshProblem {
                 write!(f, "the mesh has {n} vertex normals for {v} vertices")
             }
             MeshProblem::Normal(i) => write!(f, "vertex normal #{i} is zero or not finite"),
+            MeshProblem::TexcoordCount(n, v) => {
+                write!(f, "the mesh has {n} texture coordinates for {v} vertices")
+            }
+            MeshProblem::Texcoord(i) => write!(f, "texture coordinate #{i} is not finite"),
         }
     }
 }
@@ -217,6 +223,13 @@ pub(crate) fn mesh_problem(m: &TriangleMesh) -> Option<MeshProblem> {
     let normals = m.normals.as_deref().unwrap_or_default();
     if m.normals.is_some() && normals.len() != n {
         return Some(MeshProblem::NormalCount(normals.len(), n));
+    }
+    let uvs = m.texcoords.as_deref().unwrap_or_default();
+    if m.texcoords.is_some() && uvs.len() != n {
+        return Some(MeshProblem::TexcoordCount(uvs.len(), n));
+    }
+    if let Some(i) = uvs.iter().position(|t| !t.is_finite()) {
+        return Some(MeshProblem::Texcoord(i));
     }
     normals
         .iter()
@@ -488,6 +501,13 @@ fn check_bsdf(b: &BsdfDesc) -> Check {
             BsdfDesc::TwoSided(_) => fail(None, "twosided BSDFs cannot be nested"),
             _ => check_bsdf(inner),
         },
+        BsdfDesc::Textured { base, textures } => {
+            check_bsdf(base)?;
+            for (param, t) in textures {
+                check_texture(base, *param, t)?;
+            }
+            Ok(())
+        }
         BsdfDesc::ThinDielectric {
             int_ior,
             ext_ior,
@@ -552,6 +572,79 @@ fn check_bsdf(b: &BsdfDesc) -> Check {
 }
 
 /// Roughness in the range of [`ALPHA`].
+/// The name of a textured parameter, if `base` has it.
+pub(crate) fn textured_param_name(base: &BsdfDesc, p: TexturedParam) -> Option<&'static str> {
+    use TexturedParam as P;
+    Some(match (base, p) {
+        (BsdfDesc::Diffuse { .. }, P::Reflectance) => "reflectance",
+        (BsdfDesc::Plastic { .. }, P::DiffuseReflectance) => "diffuse_reflectance",
+        (
+            BsdfDesc::Dielectric { .. }
+            | BsdfDesc::ThinDielectric { .. }
+            | BsdfDesc::RoughDielectric { .. }
+            | BsdfDesc::Conductor { .. }
+            | BsdfDesc::RoughConductor { .. }
+            | BsdfDesc::Plastic { .. },
+            P::SpecularReflectance,
+        ) => "specular_reflectance",
+        (
+            BsdfDesc::Dielectric { .. }
+            | BsdfDesc::ThinDielectric { .. }
+            | BsdfDesc::RoughDielectric { .. },
+            P::SpecularTransmittance,
+        ) => "specular_transmittance",
+        (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::Alpha) => "alpha",
+        _ => return None,
+    })
+}
+
+/// A texture as parameter `param` of `base`: a parameter `base` has, a
+/// finite `to_uv`, an image whose size matches its data, and values in the
+/// parameter's range.
+fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Check {
+    let Some(name) = textured_param_name(base, param) else {
+        return fail(
+            None,
+            format!("this BSDF has no textured parameter {param:?}"),
+        );
+    };
+    let to_uv = match t {
+        TextureDesc::Checkerboard { to_uv, .. } => to_uv,
+        TextureDesc::Bitmap { image, to_uv, .. } => {
+            if image.width == 0
+                || image.height == 0
+                || image.data.len() != 3 * image.width * image.height
+            {
+                return fail(
+                    Some(name),
+                    "the texture's image is empty or its size does not match its data",
+                );
+            }
+            to_uv
+        }
+    };
+    if !to_uv.is_finite() {
+        return fail(Some(name), "the texture's to_uv has non-finite entries");
+    }
+    let (lo, hi) = t.range();
+    let r = match param {
+        TexturedParam::Alpha => ALPHA,
+        _ => UNIT,
+    };
+    for v in [lo, hi] {
+        if !(r.ok)(v as f64) {
+            return fail(
+                Some(name),
+                format!(
+                    "the texture for '{name}' has a value {v}, outside the parameter's range ({})",
+                    r.text
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
 fn check_microfacet(m: &MicrofacetDesc) -> Check {
     range("alpha_u", m.alpha_u as f64, ALPHA)?;
     range("alpha_v", m.alpha_v as f64, ALPHA)

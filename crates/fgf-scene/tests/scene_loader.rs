@@ -1081,8 +1081,12 @@ fn unknown_plugin_lists_the_supported_ones() {
         ],
     );
     has(
-        &err(r#"<texture type="bitmap" id="t"/>"#),
-        &["unsupported element <texture>"],
+        &err(r#"<texture type="mesh_attribute" id="t"/>"#),
+        &[
+            "test.xml:2:1",
+            "texture type 'mesh_attribute' is not supported",
+            "checkerboard, bitmap",
+        ],
     );
     has(
         &err(r#"<sensor type="perspective"><sampler type="sobol"/></sensor>"#),

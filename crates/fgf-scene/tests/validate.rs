@@ -177,6 +177,7 @@ fn transforms_meshes_and_grids_must_be_usable() {
     s.shapes[0].geometry = GeometryDesc::Mesh(Arc::new(TriangleMesh {
         positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
         normals: Some(vec![glam::Vec3::Z; 2]),
+        texcoords: None,
         indices: vec![[0, 1, 2]],
     }));
     has(
@@ -187,6 +188,7 @@ fn transforms_meshes_and_grids_must_be_usable() {
     s.shapes[0].geometry = GeometryDesc::Mesh(Arc::new(TriangleMesh {
         positions: vec![glam::Vec3::ZERO, glam::Vec3::X, glam::Vec3::Y],
         normals: None,
+        texcoords: None,
         indices: vec![[0, 1, 3]],
     }));
     has(&refused(&s), &["face index [0, 1, 3] is out of range"]);

@@ -33,12 +33,14 @@ pub use fresnel::{fresnel_conductor, fresnel_dielectric, FresnelDielectric};
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::Spectrum;
-use fgf_scene::{BsdfDesc, MicrofacetDesc, MicrofacetKind};
-use glam::Vec3;
+use crate::texture::Texture;
+use fgf_scene::{BsdfDesc, MicrofacetDesc, MicrofacetKind, TexturedParam};
+use glam::{Vec2, Vec3};
 use microfacet::{Distribution, Microfacet};
 use plastic::{Plastic, RoughPlastic};
 use rough::{RoughConductor, RoughDielectric};
 use std::f32::consts::FRAC_1_PI;
+use std::sync::Arc;
 
 /// The closed set of BSDF models.
 #[derive(Debug, Clone)]
@@ -89,6 +91,11 @@ fn microfacet(m: &MicrofacetDesc) -> Microfacet {
 pub struct Bsdf {
     pub kind: BsdfKind,
     pub twosided: bool,
+    /// Parameters given by textures (`kind` holds their means): a path
+    /// that hits this BSDF asks [`Bsdf::at`] for the BSDF at the hit's
+    /// texture coordinates. `None` for untextured BSDFs, which pay one
+    /// branch per hit for this.
+    pub textures: Option<Arc<[(TexturedParam, Texture)]>>,
 }
 
 /// The result of sampling a BSDF.
@@ -114,10 +121,12 @@ impl Bsdf {
                     reflectance: c(*reflectance),
                 },
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::Null => Bsdf {
                 kind: BsdfKind::Null,
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::Dielectric {
                 int_ior,
@@ -131,6 +140,7 @@ impl Bsdf {
                     t: c(*specular_transmittance),
                 },
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::Conductor {
                 eta,
@@ -145,6 +155,7 @@ impl Bsdf {
                     mirror: *perfect_mirror,
                 },
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::ThinDielectric {
                 int_ior,
@@ -158,6 +169,7 @@ impl Bsdf {
                     t: c(*specular_transmittance),
                 },
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::RoughConductor {
                 eta,
@@ -174,6 +186,7 @@ impl Bsdf {
                     distr: microfacet(m),
                 }),
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::RoughDielectric {
                 int_ior,
@@ -189,6 +202,7 @@ impl Bsdf {
                     distr: microfacet(m),
                 }),
                 twosided: false,
+                textures: None,
             },
             BsdfDesc::Plastic {
                 int_ior,
@@ -212,13 +226,69 @@ impl Bsdf {
                         )),
                     },
                     twosided: false,
+                    textures: None,
                 }
             }
             BsdfDesc::TwoSided(inner) => Bsdf {
                 twosided: true,
                 ..Bsdf::from_desc(inner)
             },
+            BsdfDesc::Textured { base, textures } => Bsdf {
+                textures: Some(
+                    textures
+                        .iter()
+                        .map(|(p, t)| (*p, Texture::from_desc(t)))
+                        .collect(),
+                ),
+                ..Bsdf::from_desc(base)
+            },
         }
+    }
+
+    /// This BSDF at texture coordinates `uv`: each textured parameter takes
+    /// its texture's value there (Mitsuba's lobe-sampling weights of
+    /// `plastic` keep the textures' means, as Mitsuba's do).
+    #[inline(never)]
+    pub fn at(&self, uv: Vec2) -> Bsdf {
+        use TexturedParam as P;
+        let mut b = Bsdf {
+            kind: self.kind.clone(),
+            twosided: self.twosided,
+            textures: None,
+        };
+        for (param, tex) in self.textures.iter().flat_map(|t| t.iter()) {
+            match (param, &mut b.kind) {
+                (P::Reflectance, BsdfKind::Diffuse { reflectance }) => *reflectance = tex.eval(uv),
+                (
+                    P::SpecularReflectance,
+                    BsdfKind::Dielectric { r, .. }
+                    | BsdfKind::ThinDielectric { r, .. }
+                    | BsdfKind::Conductor { r, .. },
+                ) => *r = tex.eval(uv),
+                (P::SpecularReflectance, BsdfKind::RoughConductor(c)) => c.r = tex.eval(uv),
+                (P::SpecularReflectance, BsdfKind::RoughDielectric(c)) => c.r = tex.eval(uv),
+                (
+                    P::SpecularTransmittance,
+                    BsdfKind::Dielectric { t, .. } | BsdfKind::ThinDielectric { t, .. },
+                ) => *t = tex.eval(uv),
+                (P::SpecularTransmittance, BsdfKind::RoughDielectric(c)) => c.t = tex.eval(uv),
+                (P::DiffuseReflectance, BsdfKind::Plastic(p)) => p.c.diffuse = tex.eval(uv),
+                (P::DiffuseReflectance, BsdfKind::RoughPlastic(p)) => p.c.diffuse = tex.eval(uv),
+                (P::SpecularReflectance, BsdfKind::Plastic(p)) => p.c.specular = tex.eval(uv),
+                (P::SpecularReflectance, BsdfKind::RoughPlastic(p)) => p.c.specular = tex.eval(uv),
+                (P::Alpha, BsdfKind::RoughConductor(c)) => {
+                    let a = tex.eval_1(uv);
+                    (c.distr.ax, c.distr.ay) = (a, a);
+                }
+                (P::Alpha, BsdfKind::RoughDielectric(c)) => {
+                    let a = tex.eval_1(uv);
+                    (c.distr.ax, c.distr.ay) = (a, a);
+                }
+                // The validator refuses other pairs.
+                _ => {}
+            }
+        }
+        b
     }
 
     #[inline]

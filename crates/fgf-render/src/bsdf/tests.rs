@@ -35,6 +35,7 @@ fn refraction_obeys_snell() {
             t: Spectrum::ONE,
         },
         twosided: false,
+        textures: None,
     };
     let wi = Vec3::new(0.6, 0.0, 0.8);
     let s = b.sample(wi, 0.999, [0.0, 0.0]).unwrap();
@@ -61,6 +62,7 @@ fn bsdf(kind: BsdfKind) -> Bsdf {
     Bsdf {
         kind,
         twosided: false,
+        textures: None,
     }
 }
 

@@ -6,10 +6,11 @@ use super::pack::TriPack;
 use super::types::{
     Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI, PAD,
 };
+use super::uv::cube_uv;
 use super::Geometry;
 use crate::error::RenderError;
 use fgf_scene::{GeometryDesc, ShapeDesc};
-use glam::{Affine3A, Mat3, Mat4, Vec3};
+use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3};
 use std::f32::consts::PI;
 
 /// Faces of a mesh: triangles, or parallelograms given by their corners in
@@ -77,7 +78,9 @@ fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
 struct Builder {
     tris: Vec<Tri>,
     vertex_normals: Vec<[Vec3; 3]>,
+    tri_uvs: Vec<[Vec2; 3]>,
     spheres: Vec<Sphere>,
+    sphere_to_local: Vec<Mat3>,
     disks: Vec<Disk>,
     /// Primitive references, in the order they were added.
     prims: Vec<u32>,
@@ -106,6 +109,7 @@ impl Builder {
         match &shape.geometry {
             GeometryDesc::Cube => {
                 let mut pos = Vec::new();
+                let mut uvs = Vec::new();
                 let mut idx = Vec::new();
                 for axis in 0..3 {
                     for s in [1.0f32, -1.0] {
@@ -121,11 +125,14 @@ impl Builder {
                             std::mem::swap(&mut u, &mut v);
                         }
                         let base = pos.len() as u32;
-                        pos.extend([nrm - u - v, nrm + u - v, nrm + u + v, nrm - u + v]);
+                        let corners = [nrm - u - v, nrm + u - v, nrm + u + v, nrm - u + v];
+                        pos.extend(corners);
+                        uvs.extend(corners.map(|c| cube_uv(axis, s, c)));
                         idx.push([base, base + 1, base + 2, base + 3]);
                     }
                 }
-                self.add_mesh(sid, &m, &pos, None, Faces::Quads(&idx), flip);
+                let faces = Faces::Quads(&idx);
+                self.add_mesh(sid, &m, &pos, None, Some(&uvs), faces, flip);
             }
             GeometryDesc::Rectangle => {
                 let pos = [
@@ -138,12 +145,14 @@ impl Builder {
                 // normal, which differs from the winding when det < 0.
                 let det_sign = if m.determinant() < 0.0 { -1.0 } else { 1.0 };
                 let quad = Faces::Quads(&[[0, 1, 2, 3]]);
-                self.add_mesh(sid, &m, &pos, None, quad, flip * det_sign);
+                let uvs = pos.map(|p| Vec2::new(0.5 * (p.x + 1.0), 0.5 * (p.y + 1.0)));
+                self.add_mesh(sid, &m, &pos, None, Some(&uvs), quad, flip * det_sign);
             }
             GeometryDesc::Mesh(mesh) => {
                 let faces = Faces::Tris(&mesh.indices);
                 let normals = mesh.normals.as_deref();
-                self.add_mesh(sid, &m, &mesh.positions, normals, faces, flip);
+                let uvs = mesh.texcoords.as_deref();
+                self.add_mesh(sid, &m, &mesh.positions, normals, uvs, faces, flip);
             }
             GeometryDesc::Sphere { center, radius } => {
                 let (sx, _) = similarity_scale(&m);
@@ -152,6 +161,7 @@ impl Builder {
                 let i = self.spheres.len() as u32;
                 self.sampling.push(ShapeSampling::Sphere(i));
                 self.prims.push((KIND_SPHERE << KIND_SHIFT) | i);
+                self.sphere_to_local.push(Mat3::from_mat4(m).inverse());
                 self.spheres.push(Sphere {
                     center: m.transform_point3(*center),
                     radius: r,
@@ -178,12 +188,14 @@ impl Builder {
         }
     }
 
+    #[allow(clippy::too_many_arguments)]
     fn add_mesh(
         &mut self,
         sid: u32,
         m: &Mat4,
         pos: &[Vec3],
         normals: Option<&[Vec3]>,
+        uvs: Option<&[Vec2]>,
         faces: Faces,
         sign: f32,
     ) {
@@ -198,29 +210,30 @@ impl Builder {
         let mut cdf = Vec::new();
         let mut total = 0.0f32;
         // Each face as (v0, edge to u = 1, edge to v = 1, parallelogram?,
-        // its vertex indices if a triangle: they index the vertex normals).
+        // its vertex indices if a triangle: they index the vertex normals,
+        // the vertices at v0, v0 + e1, v0 + e2: they index the uvs).
         let face = |i0: u32, i1: u32, i2: u32| {
             let v0 = wp[i0 as usize];
             (v0, wp[i1 as usize] - v0, wp[i2 as usize] - v0)
         };
-        type Face = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>);
+        type Face = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>, [u32; 3]);
         let corners: Vec<Face> = match faces {
             Faces::Tris(idx) => idx
                 .iter()
                 .map(|t| {
                     let (v0, e1, e2) = face(t[0], t[1], t[2]);
-                    (v0, e1, e2, false, Some(*t))
+                    (v0, e1, e2, false, Some(*t), *t)
                 })
                 .collect(),
             Faces::Quads(idx) => idx
                 .iter()
                 .map(|q| {
                     let (v0, e1, e2) = face(q[0], q[1], q[3]);
-                    (v0, e1, e2, true, None)
+                    (v0, e1, e2, true, None, [q[0], q[1], q[3]])
                 })
                 .collect(),
         };
-        for (v0, e1, e2, quad, tri_idx) in corners {
+        for (v0, e1, e2, quad, tri_idx, verts) in corners {
             let c = e1.cross(e2);
             // Degenerate faces can never be hit and have no area.
             if !(c.length_squared() > 0.0) || !c.is_finite() {
@@ -237,6 +250,13 @@ impl Builder {
                 }
                 _ => u32::MAX,
             };
+            let uvs_idx = match uvs {
+                Some(uv) if verts.iter().all(|&i| (i as usize) < uv.len()) => {
+                    self.tri_uvs.push(verts.map(|i| uv[i as usize]));
+                    (self.tri_uvs.len() - 1) as u32
+                }
+                _ => u32::MAX,
+            };
             let tri = Tri {
                 v0: v0.into(),
                 e1: e1.into(),
@@ -244,6 +264,7 @@ impl Builder {
                 n: c.normalize() * sign,
                 shape: sid,
                 normals: normals_idx,
+                uvs: uvs_idx,
                 quad,
             };
             total += tri.area();
@@ -311,7 +332,9 @@ impl Builder {
         Geometry {
             tris: self.tris,
             vertex_normals: self.vertex_normals,
+            tri_uvs: self.tri_uvs,
             spheres: self.spheres,
+            sphere_to_local: self.sphere_to_local,
             disks: self.disks,
             prims,
             packs,

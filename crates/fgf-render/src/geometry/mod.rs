@@ -15,7 +15,16 @@
 //! * `build`: [`Geometry::build`], validation and compilation of the shapes;
 //! * [`bvh`]: the hierarchy; `pack`: the 4-wide leaf test;
 //! * `query`: [`Geometry::intersect`], [`Geometry::intersect2`],
-//!   [`Geometry::for_each_hit`]; `sample`: [`Geometry::sample_shape`].
+//!   [`Geometry::for_each_hit`]; `sample`: [`Geometry::sample_shape`];
+//!   `uv`: [`Geometry::uv`], a hit's texture coordinates, computed only
+//!   when a texture asks for them (untextured scenes never pay for them).
+//!
+//! Texture coordinates follow Mitsuba 3's parameterisations: a mesh's
+//! per-vertex `(u, v)` interpolated by barycentrics (the barycentrics
+//! themselves for a mesh without any); `rectangle`: `(x + 1)/2, (y + 1)/2`
+//! of the local point; `disk`: `(r, φ/2π)`; `sphere`: `(φ/2π, θ/π)` of the
+//! local direction (φ in [0, 2π) from +x toward +y, θ from +z); `cube`: an
+//! affine map per face, the one Mitsuba's cube mesh interpolates.
 
 mod build;
 pub mod bvh;
@@ -25,11 +34,12 @@ mod sample;
 #[cfg(test)]
 mod tests;
 mod types;
+mod uv;
 
 pub use types::{Hit, HitRecord, PositionSample};
 
 use bvh::Bvh;
-use glam::Vec3;
+use glam::{Mat3, Vec2, Vec3};
 use pack::TriPack;
 use types::{Disk, ShapeSampling, Sphere, Tri};
 
@@ -37,7 +47,12 @@ use types::{Disk, ShapeSampling, Sphere, Tri};
 pub struct Geometry {
     tris: Vec<Tri>,
     vertex_normals: Vec<[Vec3; 3]>,
+    /// Texture coordinates of the triangles that have them (`Tri::uvs`).
+    tri_uvs: Vec<[Vec2; 3]>,
     spheres: Vec<Sphere>,
+    /// Each sphere's world-to-local linear map (about its centre), for its
+    /// texture coordinates.
+    sphere_to_local: Vec<Mat3>,
     disks: Vec<Disk>,
     /// Primitive references in BVH leaf order, each leaf starting at a
     /// multiple of 4 (padded with `types::PAD`).

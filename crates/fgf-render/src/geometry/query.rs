@@ -130,9 +130,9 @@ impl Geometry {
 
     /// The [`Hit`] of primitive `p` hit at `t` (barycentrics `u, v`).
     #[inline(always)]
-    pub fn make_hit(&self, ray: &Ray, HitRecord((p, t, u, v)): HitRecord) -> Hit {
-        let i = (p & INDEX_MASK) as usize;
-        match p >> KIND_SHIFT {
+    pub fn make_hit(&self, ray: &Ray, HitRecord((prim, t, u, v)): HitRecord) -> Hit {
+        let i = (prim & INDEX_MASK) as usize;
+        match prim >> KIND_SHIFT {
             KIND_TRI => {
                 let tri = &self.tris[i];
                 let ns = if tri.normals != u32::MAX {
@@ -149,6 +149,8 @@ impl Geometry {
                     n: tri.n,
                     ns,
                     shape: tri.shape,
+                    prim,
+                    bary: [u, v],
                 }
             }
             KIND_SPHERE => {
@@ -163,6 +165,8 @@ impl Geometry {
                     n,
                     ns: n,
                     shape: s.shape,
+                    prim,
+                    bary: [0.0; 2],
                 }
             }
             _ => {
@@ -173,6 +177,8 @@ impl Geometry {
                     n: d.n,
                     ns: d.n,
                     shape: d.shape,
+                    prim,
+                    bary: [0.0; 2],
                 }
             }
         }

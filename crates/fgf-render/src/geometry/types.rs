@@ -13,6 +13,11 @@ pub struct Hit {
     /// Unit shading normal (interpolated vertex normals, else `n`).
     pub ns: Vec3,
     pub shape: u32,
+    /// The primitive hit and its barycentrics `(u, v)` there (zero for
+    /// spheres and disks), from which [`super::Geometry::uv`] computes the
+    /// texture coordinates only when a texture asks for them.
+    pub(crate) prim: u32,
+    pub(crate) bary: [f32; 2],
 }
 
 /// A hit found by a query but not yet made into a [`Hit`]: primitive,
@@ -35,6 +40,10 @@ pub(super) struct Tri {
     pub(super) shape: u32,
     /// Index into `Geometry::vertex_normals`, or `u32::MAX` without normals.
     pub(super) normals: u32,
+    /// Index into `Geometry::tri_uvs` (the texture coordinates at `v0`,
+    /// `v0 + e1`, `v0 + e2`), or `u32::MAX`: then the barycentrics are the
+    /// texture coordinates, as for Mitsuba's meshes without any.
+    pub(super) uvs: u32,
     pub(super) quad: bool,
 }
 

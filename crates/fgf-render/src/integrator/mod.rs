@@ -200,6 +200,16 @@ impl World {
                 start = SegmentStart::Surface;
                 continue;
             }
+            // A textured BSDF is made concrete at the hit's texture
+            // coordinates, which are computed only here.
+            let textured;
+            let bsdf = match bsdf.textures {
+                None => bsdf,
+                Some(_) => {
+                    textured = bsdf.at(self.geom.uv(&h));
+                    &textured
+                }
+            };
             // This interaction would be event number depth + 1: nothing it
             // leads to can contribute unless depth + 1 < max_depth.
             // A thin dielectric's transmission does not count (see below),

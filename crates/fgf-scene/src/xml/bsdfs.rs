@@ -7,29 +7,31 @@
 //! both sides). `roughplastic` is refused for now: its diffuse lobe is 7 %
 //! brighter than Mitsuba 3.9.1's at grazing incidence. The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
-//! (Heitz 2018) unless `sample_visible` is false. Textures as parameters,
-//! anisotropic roughness, `mask` and `principled` are refused with a
+//! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
+//! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
+//! where Mitsuba 3 allows one (which parameters, and how: [`super::textures`]).
+//! Anisotropic roughness, `mask` and `principled` are refused with a
 //! message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
 //! | plugin | parameter | type | units | range | default | meaning |
 //! |---|---|---|---|---|---|---|
-//! | `diffuse` | `reflectance` | float or rgb | – | in [0, 1] | 0.5 | |
+//! | `diffuse` | `reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | |
 //! | `dielectric` | `int_ior`, `ext_ior` | float or string | – | a number > 0 or a name of Mitsuba's table (`"water"`, `"bk7"`, `"diamond"`, ...) | `"bk7"` (1.5046), `"air"` (1.000277) | index of refraction inside and outside |
-//! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float or rgb | – | in [0, 1] | 1, 1 | |
+//! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float, rgb or texture | – | in [0, 1] | 1, 1 | |
 //! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
 //! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
-//! | `conductor` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | |
+//! | `conductor` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | |
 //! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | reflectance `2R/(1+R)` of the two faces; the rest is transmitted undeviated |
 //! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
 //! | `roughconductor` | `material`, `eta`, `k`, `specular_reflectance` | as `conductor` | | | as `conductor` | |
 //! | rough plugins | `distribution` | string | – | `"beckmann"`, `"ggx"` | `"beckmann"` | microfacet normal distribution |
-//! | rough plugins | `alpha` | float | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
+//! | rough plugins | `alpha` | float, or texture (`roughconductor`, `roughdielectric`) | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
 //! | rough plugins | `sample_visible` | boolean | – | – | true | sample only the normals visible from the incident direction |
 //! | `plastic`, `roughplastic` | `int_ior`, `ext_ior` | float or string | – | as `dielectric`, not equal | `"polypropylene"` (1.49), `"air"` | the coating's indices |
-//! | `plastic`, `roughplastic` | `diffuse_reflectance` | float or rgb | – | in [0, 1] | 0.5 | the base |
-//! | `plastic`, `roughplastic` | `specular_reflectance` | float or rgb | – | in [0, 1] | 1 | scales the coating's reflection |
+//! | `plastic`, `roughplastic` | `diffuse_reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | the base |
+//! | `plastic`, `roughplastic` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | scales the coating's reflection |
 //! | `plastic`, `roughplastic` | `nonlinear` | boolean | – | – | false | account for the colour shift of internal scattering (`ρ/(1 - ρ F_int)` instead of `ρ/(1 - F_int)`) |
 //! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
 //!
@@ -60,6 +62,7 @@ use super::context::{check_object_attrs, plugin_type, rgb, Ctx};
 use super::document::XNode;
 use super::props::{check, check_if, check_rgb, Entry, Props};
 use super::tables;
+use super::textures::{self, ColorOrTexture};
 use crate::desc::*;
 use crate::error::SceneError;
 use crate::validate::{ALPHA, IOR, NON_NEGATIVE, UNIT};
@@ -101,7 +104,12 @@ const BSDFS: &[&str] = &[
 /// `alpha_u`/`alpha_v` (roughplastic). Anisotropic roughness is refused:
 /// its orientation follows the surface tangent `dp/du`, which the renderer
 /// does not carry.
-fn microfacet_desc(p: &Props, isotropic: bool) -> Result<MicrofacetDesc, SceneError> {
+fn microfacet_desc<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    isotropic: bool,
+    textures: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<MicrofacetDesc, SceneError> {
     let kind = match p
         .choice("distribution", "beckmann", &["beckmann", "ggx"])?
         .as_str()
@@ -109,7 +117,25 @@ fn microfacet_desc(p: &Props, isotropic: bool) -> Result<MicrofacetDesc, SceneEr
         "ggx" => MicrofacetKind::Ggx,
         _ => MicrofacetKind::Beckmann,
     };
-    let alpha = p.float("alpha")?;
+    for name in ["alpha_u", "alpha_v"] {
+        if let Some(e) = p.peek(name).filter(|e| e.target.tag == "texture") {
+            return Err(e.node.err(format!(
+                "a texture as '{name}' (anisotropic roughness) is not supported; give one 'alpha'"
+            )));
+        }
+    }
+    // A texture alpha: the description keeps its mean (see `textures`).
+    let alpha = match p.peek("alpha").filter(|e| e.target.tag == "texture") {
+        Some(e) => match textures::color_or_texture(ctx, p, "alpha", [0.1; 3], ALPHA)? {
+            ColorOrTexture::Texture(t) => {
+                let mean = (t.mean() as f64).clamp(1e-4, 4.0);
+                textures.push((TexturedParam::Alpha, t));
+                Some((mean, e.node))
+            }
+            ColorOrTexture::Color(c) => Some((c[0], e.node)),
+        },
+        None => p.float("alpha")?,
+    };
     let au = p.float("alpha_u")?;
     let av = p.float("alpha_v")?;
     let chk = |v: Option<(f64, &XNode)>, name: &str| -> Result<Option<f64>, SceneError> {
@@ -316,16 +342,47 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
         _ => &[],
     };
     let p = Props::new(n, &ctx.ids, known)?;
+    // Parameters given by textures; the description keeps their means.
+    let mut tex: Vec<(TexturedParam, TextureDesc)> = Vec::new();
+    let col = |ctx: &mut Ctx<'a>,
+               name: &str,
+               param: TexturedParam,
+               default: f64,
+               tex: &mut Vec<(TexturedParam, TextureDesc)>|
+     -> Result<Rgb, SceneError> {
+        Ok(
+            match textures::color_or_texture(ctx, &p, name, [default; 3], UNIT)? {
+                ColorOrTexture::Color(c) => rgb(c),
+                ColorOrTexture::Texture(t) => {
+                    let m = t.mean();
+                    tex.push((param, t));
+                    [m; 3]
+                }
+            },
+        )
+    };
+    use TexturedParam as T;
     let d = match ty {
         "diffuse" => BsdfDesc::Diffuse {
-            reflectance: rgb(p.color_in("reflectance", [0.5; 3], UNIT)?),
+            reflectance: col(ctx, "reflectance", T::Reflectance, 0.5, &mut tex)?,
         },
         "null" => BsdfDesc::Null,
         "dielectric" | "thindielectric" | "roughdielectric" => {
             let (int_ior, ext_ior) = iors(&p, 1.5046)?;
-            let specular_reflectance = rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?);
-            let specular_transmittance =
-                rgb(p.color_in("specular_transmittance", [1.0; 3], UNIT)?);
+            let specular_reflectance = col(
+                ctx,
+                "specular_reflectance",
+                T::SpecularReflectance,
+                1.0,
+                &mut tex,
+            )?;
+            let specular_transmittance = col(
+                ctx,
+                "specular_transmittance",
+                T::SpecularTransmittance,
+                1.0,
+                &mut tex,
+            )?;
             match ty {
                 "dielectric" => BsdfDesc::Dielectric {
                     int_ior,
@@ -344,13 +401,19 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                     ext_ior,
                     specular_reflectance,
                     specular_transmittance,
-                    microfacet: microfacet_desc(&p, false)?,
+                    microfacet: microfacet_desc(ctx, &p, false, &mut tex)?,
                 },
             }
         }
         "conductor" | "roughconductor" => {
             let (eta, k) = conductor_eta_k(&p)?;
-            let specular_reflectance = rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?);
+            let specular_reflectance = col(
+                ctx,
+                "specular_reflectance",
+                T::SpecularReflectance,
+                1.0,
+                &mut tex,
+            )?;
             let perfect_mirror = eta == [0.0; 3] && k == [1.0; 3];
             if ty == "conductor" {
                 BsdfDesc::Conductor {
@@ -365,7 +428,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                     k: rgb(k),
                     specular_reflectance,
                     perfect_mirror,
-                    microfacet: microfacet_desc(&p, false)?,
+                    microfacet: microfacet_desc(ctx, &p, false, &mut tex)?,
                 }
             }
         }
@@ -386,11 +449,23 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             BsdfDesc::Plastic {
                 int_ior,
                 ext_ior,
-                diffuse_reflectance: rgb(p.color_in("diffuse_reflectance", [0.5; 3], UNIT)?),
-                specular_reflectance: rgb(p.color_in("specular_reflectance", [1.0; 3], UNIT)?),
+                diffuse_reflectance: col(
+                    ctx,
+                    "diffuse_reflectance",
+                    T::DiffuseReflectance,
+                    0.5,
+                    &mut tex,
+                )?,
+                specular_reflectance: col(
+                    ctx,
+                    "specular_reflectance",
+                    T::SpecularReflectance,
+                    1.0,
+                    &mut tex,
+                )?,
                 nonlinear: p.bool_or("nonlinear", false)?,
                 microfacet: if ty == "roughplastic" {
-                    Some(microfacet_desc(&p, true)?)
+                    Some(microfacet_desc(ctx, &p, true, &mut tex)?)
                 } else {
                     None
                 },
@@ -426,5 +501,12 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
         }
     };
     p.finish()?;
-    Ok(d)
+    Ok(if tex.is_empty() {
+        d
+    } else {
+        BsdfDesc::Textured {
+            base: Box::new(d),
+            textures: tex,
+        }
+    })
 }

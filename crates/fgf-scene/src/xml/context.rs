@@ -29,6 +29,8 @@ pub(crate) struct Ctx<'a> {
     pub resolving: Vec<String>,
     /// Top-level `area` emitters referenced by a shape, with that shape.
     pub area_refs: HashMap<String, &'a XNode>,
+    /// Textures with an id, instantiated once (a bitmap is read once).
+    pub texture_by_id: HashMap<String, TextureDesc>,
 }
 
 impl<'a> Ctx<'a> {
@@ -52,6 +54,7 @@ impl<'a> Ctx<'a> {
             medium_nodes: Vec::new(),
             resolving: Vec::new(),
             area_refs: HashMap::new(),
+            texture_by_id: HashMap::new(),
         })
     }
 }

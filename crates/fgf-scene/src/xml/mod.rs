@@ -31,7 +31,7 @@
 //! * Plugins: one module per family, each opening with the family's
 //!   parameter table (units, valid range, default) and an XML and a Python
 //!   example: [`integrators`], [`sensors`] (sensor, film, sampler, filters),
-//!   [`shapes`], [`bsdfs`], [`emitters`], [`media`] (`homogeneous`,
+//!   [`shapes`], [`bsdfs`], [`textures`], [`emitters`], [`media`] (`homogeneous`,
 //!   `heterogeneous`), [`nonexp`] (fgf's non-exponential `fgf` and
 //!   `nonexponential`), [`volumes`] and [`phase`].
 //! * Mitsuba defaults that change images and are easy to miss: a shape
@@ -100,6 +100,7 @@ pub mod sensors;
 pub mod shapes;
 mod spectrum;
 mod tables;
+pub mod textures;
 mod transform;
 pub mod volumes;
 
@@ -180,7 +181,15 @@ fn load_str_cancellable(
     }
 }
 
-const TOP_LEVEL: &[&str] = &["integrator", "sensor", "shape", "bsdf", "emitter", "medium"];
+const TOP_LEVEL: &[&str] = &[
+    "integrator",
+    "sensor",
+    "shape",
+    "bsdf",
+    "emitter",
+    "medium",
+    "texture",
+];
 
 /// Stage 2: instantiate the top-level elements, in file order (a shape's
 /// nested objects are instantiated with it), fill in Mitsuba's defaults for
@@ -232,6 +241,11 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
             }
             "medium" => {
                 media::medium_id(&mut ctx, n)?;
+            }
+            // Instantiated here so that its errors are reported even if
+            // nothing uses it; shared by `<ref>` afterwards.
+            "texture" => {
+                textures::texture_node(&mut ctx, n)?;
             }
             // A sampler, film or filter declared at the top level is used
             // where a <ref> names it (Mitsuba's documentation scenes do this).

@@ -81,9 +81,15 @@ impl<'a> Entry<'a> {
     }
 
     fn expect(&self, what: &str) -> SceneError {
+        let name = self.name.unwrap_or("?");
+        if self.target.tag == "texture" {
+            return self.node.err(format!(
+                "a texture ({}) as parameter '{name}' is not supported here (it must be {what})",
+                self.target.attr("type").unwrap_or("?")
+            ));
+        }
         self.node.err(format!(
-            "parameter '{}' must be {what}, not <{}>",
-            self.name.unwrap_or("?"),
+            "parameter '{name}' must be {what}, not <{}>",
             self.node.tag
         ))
     }
@@ -299,6 +305,13 @@ impl<'a> Props<'a> {
             entries,
             known,
         })
+    }
+
+    /// The named entry, if present and not yet taken, without taking it.
+    pub fn peek(&self, name: &str) -> Option<&Entry<'a>> {
+        self.entries
+            .iter()
+            .find(|e| e.name == Some(name) && !e.used.get())
     }
 
     /// Take the named entry, if present.

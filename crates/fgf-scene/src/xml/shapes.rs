@@ -15,6 +15,15 @@
 //! | `serialized` | `filename` | string | – | a Mitsuba `.serialized` file (format versions 3 and 4), found like every file (see [`super`]) | required | |
 //! | `serialized` | `shape_index` | integer | – | 0 … meshes in the file − 1 | 0 | which mesh of the file |
 //! | all | nested `bsdf` | – | – | one, or a `<ref>` | diffuse 0.5; diffuse 0 on a shape with an area emitter | see below |
+//!
+//! **Texture coordinates** (for [`super::textures`]) are Mitsuba 3's: a
+//! mesh's per-vertex `(u, v)` (an OBJ's `vt` stored as `(u, 1 − v)`; a
+//! PLY's `u v`, `s t` or `texture_u texture_v`; a `serialized` mesh's)
+//! interpolated across each triangle, or the triangle's barycentrics if the
+//! file has none; `rectangle`: `((x + 1)/2, (y + 1)/2)` of the local point;
+//! `disk`: `(r, φ/2π)`; `sphere`: `(φ/2π, θ/π)` of the local direction (φ
+//! from +x toward +y in [0, 2π), θ from +z); `cube`: each face mapped
+//! affinely onto the unit square as Mitsuba's cube mesh maps it.
 //! | all | nested `emitter` | – | – | one `area` emitter, nested or a `<ref>` to one declared at the top level with an `id` (used by one shape only) | none | see [`super::emitters`] |
 //! | all | nested `medium` | – | – | `name="interior"` and/or `name="exterior"` | none | see [`super::media`] |
 //!

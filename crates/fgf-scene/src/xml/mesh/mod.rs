@@ -7,7 +7,8 @@
 //!   `binary_big_endian`. `ply-rs` (the only PLY crate) has had no release
 //!   since 2020, and a reader this size lets us refuse hostile headers
 //!   (element counts larger than the file could hold) before allocating.
-//!   It reads `vertex` (`x y z`, optional `nx ny nz`) and `face`
+//!   It reads `vertex` (`x y z`, optional `nx ny nz` and texture
+//!   coordinates `u v`, `s t` or `texture_u texture_v`) and `face`
 //!   (`vertex_indices` or `vertex_index` lists; n-gons fan-triangulated);
 //!   other elements and properties are skipped.
 //!
@@ -15,6 +16,8 @@
 //!   read with `flate2`, any mesh of the file by `shape_index`.
 //!
 //! Normals are kept only if every vertex has one; they are normalised.
+//! Texture coordinates likewise (an OBJ's `vt` as `(u, 1 - v)`, as
+//! Mitsuba 3 stores them, so that `v = 0` is an image's top row).
 //!
 //! Meshes without vertex normals get Mitsuba's smooth ones from
 //! [`smooth_vertex_normals`] (user docs: [`super::shapes`]). Mitsuba
@@ -37,7 +40,7 @@ use super::document::XNode;
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::validate::{mesh_problem, MeshProblem};
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::path::Path;
 
 pub(super) fn read_file(fnode: &XNode, path: &Path, what: &str) -> Result<Vec<u8>, SceneError> {
@@ -54,11 +57,13 @@ pub(super) fn read_file(fnode: &XNode, path: &Path, what: &str) -> Result<Vec<u8
 pub(super) fn finish(
     positions: Vec<Vec3>,
     normals: Option<Vec<Vec3>>,
+    texcoords: Option<Vec<Vec2>>,
     indices: Vec<[u32; 3]>,
 ) -> Result<TriangleMesh, String> {
     let mut m = TriangleMesh {
         positions,
         normals,
+        texcoords,
         indices,
     };
     match mesh_problem(&m) {

@@ -4,7 +4,7 @@ use super::{finish, read_file};
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::xml::document::XNode;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::collections::HashMap;
 use std::path::Path;
 
@@ -32,6 +32,8 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
     let mut positions = Vec::new();
     let mut normals = Vec::new();
     let mut all_normals = true;
+    let mut texcoords = Vec::new();
+    let mut all_texcoords = true;
     let mut indices = Vec::new();
     // tobj numbers the vertices of each `o`/`g` group separately, while
     // Mitsuba shares one `v/vt/vn` vertex across groups (it matters for the
@@ -47,6 +49,7 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
         let has_n = mesh.normals.len() == mesh.positions.len();
         let has_tc = mesh.texcoords.len() == 2 * nv;
         all_normals &= has_n;
+        all_texcoords &= has_tc;
         let mut ids = Vec::with_capacity(nv);
         let mut mine: Vec<(Key, u32)> = Vec::with_capacity(nv);
         for i in 0..nv {
@@ -73,6 +76,8 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
                         .map_err(|_| fmt("more than 2^32 vertices".into()))?;
                     positions.push(p);
                     normals.push(n);
+                    // Mitsuba 3 flips v: an image's top row is v = 0.
+                    texcoords.push(Vec2::new(tc[0], 1.0 - tc[1]));
                     mine.push((key, id));
                     id
                 }
@@ -95,6 +100,7 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
     finish(
         positions,
         (all_normals && !normals.is_empty()).then_some(normals),
+        (all_texcoords && !texcoords.is_empty()).then_some(texcoords),
         indices,
     )
     .map_err(fmt)

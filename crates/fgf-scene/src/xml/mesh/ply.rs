@@ -4,7 +4,7 @@ use super::{finish, read_file};
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::xml::document::XNode;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::path::Path;
 
 pub(crate) fn load_ply(fnode: &XNode, path: &Path) -> Result<TriangleMesh, SceneError> {
@@ -244,6 +244,7 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
     };
     let mut positions: Option<Vec<Vec3>> = None;
     let mut normals: Option<Vec<Vec3>> = None;
+    let mut texcoords: Option<Vec<Vec2>> = None;
     let mut indices: Option<Vec<[u32; 3]>> = None;
     for el in &elements {
         // Refuse counts the rest of the file cannot hold before allocating.
@@ -280,6 +281,11 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
                     return Err("the 'vertex' element lacks x, y or z".into());
                 }
                 let has_n = nxyz.iter().all(|i| i.is_some());
+                // Mitsuba's names for texture coordinates, in its order.
+                let uv = [("u", "v"), ("s", "t"), ("texture_u", "texture_v")]
+                    .iter()
+                    .find_map(|(a, b)| Some([find(a)?, find(b)?]));
+                let mut ts = Vec::with_capacity(if uv.is_some() { el.count } else { 0 });
                 let mut ps = Vec::with_capacity(el.count);
                 let mut ns = Vec::with_capacity(if has_n { el.count } else { 0 });
                 let mut vals = vec![0f64; el.props.len()];
@@ -300,9 +306,13 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
                     if has_n {
                         ns.push(Vec3::new(g(nxyz[0]), g(nxyz[1]), g(nxyz[2])));
                     }
+                    if let Some([iu, iv]) = uv {
+                        ts.push(Vec2::new(vals[iu] as f32, vals[iv] as f32));
+                    }
                 }
                 positions = Some(ps);
                 normals = has_n.then_some(ns);
+                texcoords = uv.map(|_| ts);
             }
             "face" => {
                 if indices.is_some() {
@@ -371,7 +381,7 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
     }
     let positions = positions.ok_or("no 'vertex' element")?;
     let indices = indices.ok_or("no 'face' element")?;
-    finish(positions, normals, indices)
+    finish(positions, normals, texcoords, indices)
 }
 
 #[cfg(test)]
@@ -421,6 +431,23 @@ mod tests {
             assert_eq!(m.normals.as_ref().unwrap()[0], Vec3::Z);
             assert_eq!(m.indices, vec![[0, 1, 2]]);
         }
+    }
+
+    /// Mitsuba's three names for texture coordinates are read as written.
+    #[test]
+    fn texture_coordinates_under_each_name() {
+        for (a, b) in [("u", "v"), ("s", "t"), ("texture_u", "texture_v")] {
+            let ply = format!(
+                "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float {a}\nproperty float {b}\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0.1 0.2\n1 0 0 0.9 0.3\n0 1 0 0.2 0.7\n3 0 1 2\n"
+            );
+            let m = parse_ply(ply.as_bytes()).unwrap();
+            let t = m.texcoords.expect("texture coordinates");
+            assert_eq!(t[1], Vec2::new(0.9, 0.3), "{a}, {b}");
+        }
+        assert!(parse_ply(SQUARE_ASCII.as_bytes())
+            .unwrap()
+            .texcoords
+            .is_none());
     }
 
     #[test]

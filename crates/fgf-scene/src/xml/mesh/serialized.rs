@@ -18,7 +18,7 @@ use super::{finish, read_file};
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::xml::document::XNode;
-use glam::Vec3;
+use glam::{Vec2, Vec3};
 use std::io::Read;
 use std::path::Path;
 
@@ -194,9 +194,12 @@ fn parse(b: &[u8], shape_index: u32) -> Result<Serialized, String> {
     } else {
         None
     };
-    if flags & HAS_TEXCOORDS != 0 {
-        floats(nv * 2, "texture coordinates")?;
-    }
+    let texcoords = if flags & HAS_TEXCOORDS != 0 {
+        let t = floats(nv * 2, "texture coordinates")?;
+        Some(t.chunks_exact(2).map(|c| Vec2::new(c[0], c[1])).collect())
+    } else {
+        None
+    };
     if flags & HAS_COLORS != 0 {
         floats(nv * 3, "vertex colours")?;
     }
@@ -213,6 +216,7 @@ fn parse(b: &[u8], shape_index: u32) -> Result<Serialized, String> {
     let mesh = finish(
         positions,
         if face_normals { None } else { normals },
+        texcoords,
         indices,
     )?;
     Ok(Serialized { mesh, face_normals })
