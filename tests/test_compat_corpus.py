@@ -67,12 +67,12 @@ DERIVED: list[tuple[str, str | None]] = [
     (f"{PM}/test_hetero_spectral_sigmat_volpathmis.xml", None),
     (f"{PM}/test_homo_area_light_volpath.xml", None),
     (f"{PM}/test_homo_dielectric_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", "roughplastic"),
+    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", None),
     (f"{PM}/test_homo_null_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", "roughplastic"),
+    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", None),
     (f"{PM}/test_homo_roughdielectric_spot_volpath.xml", None),
     (f"{PM}/test_homo_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_surf_area_light_volpath.xml", "roughplastic"),
+    (f"{PM}/test_surf_area_light_volpath.xml", None),
 ]
 ENVMAP = re.compile(r"<emitter\s+type=[\"']envmap[\"'][^>]*>.*?</emitter>", re.S)
 CHECKER = re.compile(r"<texture\s+type=[\"']checkerboard[\"']\s+name=[\"'](\w+)[\"'][^>]*>.*?</texture>", re.S)
