@@ -17,10 +17,11 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import fgf
-from test_render_mitsuba import compare
+from test_render_mitsuba import Z_MEAN, compare, welch
 
 pytest.importorskip("mitsuba")
 
@@ -134,3 +135,44 @@ def test_corpus_media_scene_derived(small_corpus: Path, scene: str, missing: str
         fgf.render(path, spp=1, progress=False)
     msg = str(e.value)
     assert "\n" not in msg and missing in msg, msg
+
+
+# The emitter-in-medium scene lit by its area emitter only (the environment
+# removed): the per-seed image means of many seeds, so that a bias of a few
+# tenths of a percent shows. K = 128 seeds at 256 spp give a standard error
+# of the difference of about 0.085 % of the image mean. fgf is still 0.55 %
+# brighter than Mitsuba here (z ≈ 6.5), from the `thindielectric` spheres
+# around the emitter, cause not found (docs/compatibility.md): a strict xfail
+# until it is, so that the fix shows.
+EMITTER_ONLY_K = 128
+EMITTER_ONLY_SPP = 256
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="fgf 0.55 % brighter (z 6.5): thin dielectrics around an emitter, docs/compatibility.md")
+def test_emitter_inside_medium_light_only_agrees_with_many_seeds(small_corpus: Path) -> None:
+    derived = derive(small_corpus / PM / "test_homo_emitter_inside_medium_volpath.xml")
+    scene = derived.with_name("emitter_only.xml")
+    text = derived.read_text().replace('<emitter type="constant"><rgb name="radiance" value="1"/></emitter>', "")
+    assert "<emitter type=\"area\">" in text and "constant" not in text
+    scene.write_text(text)
+    mine = np.array(
+        [
+            fgf.render(scene, spp=EMITTER_ONLY_SPP, seed=100000 + i, progress=False).mean(axis=(0, 1), dtype=np.float64)
+            for i in range(EMITTER_ONLY_K)
+        ]
+    )
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    sc = mi.load_file(str(scene))
+    theirs = np.array(
+        [
+            np.array(mi.render(sc, seed=i, spp=EMITTER_ONLY_SPP))[..., :3].mean(axis=(0, 1), dtype=np.float64)
+            for i in range(EMITTER_ONLY_K)
+        ]
+    )
+    ma, mb, se, t, _ = welch(mine, theirs)
+    msg = f"emitter only: fgf {ma} vs mitsuba {mb}, SE {se}, z {t}, relative {ma / mb - 1}"
+    print(msg)
+    assert (np.abs(t) <= Z_MEAN).all(), msg
