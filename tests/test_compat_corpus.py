@@ -140,16 +140,17 @@ def test_corpus_media_scene_derived(small_corpus: Path, scene: str, missing: str
 # The emitter-in-medium scene lit by its area emitter only (the environment
 # removed): the per-seed image means of many seeds, so that a bias of a few
 # tenths of a percent shows. K = 128 seeds at 256 spp give a standard error
-# of the difference of about 0.085 % of the image mean. fgf is still 0.55 %
-# brighter than Mitsuba here (z ≈ 6.5), from the `thindielectric` spheres
-# around the emitter, cause not found (docs/compatibility.md): a strict xfail
-# until it is, so that the fix shows.
+# of the difference of about 0.085 % of the image mean. fgf is 0.55 %
+# brighter than Mitsuba's volpath here (z ≈ 6.5), from the `thindielectric`
+# spheres around the emitter; in a smaller scene of that kind (no medium)
+# fgf agrees with Mitsuba's `path` integrator, and Mitsuba's `volpath` does
+# not (docs/compatibility.md). A strict xfail, so that any change shows.
 EMITTER_ONLY_K = 128
 EMITTER_ONLY_SPP = 256
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="fgf 0.55 % brighter (z 6.5): thin dielectrics around an emitter, docs/compatibility.md")
+@pytest.mark.xfail(strict=True, reason="fgf 0.55 % above Mitsuba's volpath (z 6.5): thin dielectrics around an emitter, docs/compatibility.md")
 def test_emitter_inside_medium_light_only_agrees_with_many_seeds(small_corpus: Path) -> None:
     derived = derive(small_corpus / PM / "test_homo_emitter_inside_medium_volpath.xml")
     scene = derived.with_name("emitter_only.xml")
