@@ -17,10 +17,11 @@ import re
 import shutil
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 import fgf
-from test_render_mitsuba import compare
+from test_render_mitsuba import Z_MEAN, compare, welch
 
 pytest.importorskip("mitsuba")
 
@@ -67,12 +68,12 @@ DERIVED: list[tuple[str, str | None]] = [
     (f"{PM}/test_hetero_spectral_sigmat_volpathmis.xml", None),
     (f"{PM}/test_homo_area_light_volpath.xml", None),
     (f"{PM}/test_homo_dielectric_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", "roughplastic"),
+    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", None),
     (f"{PM}/test_homo_null_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", "roughplastic"),
+    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", None),
     (f"{PM}/test_homo_roughdielectric_spot_volpath.xml", None),
     (f"{PM}/test_homo_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_surf_area_light_volpath.xml", "roughplastic"),
+    (f"{PM}/test_surf_area_light_volpath.xml", None),
 ]
 ENVMAP = re.compile(r"<emitter\s+type=[\"']envmap[\"'][^>]*>.*?</emitter>", re.S)
 CHECKER = re.compile(r"<texture\s+type=[\"']checkerboard[\"']\s+name=[\"'](\w+)[\"'][^>]*>.*?</texture>", re.S)
@@ -134,3 +135,45 @@ def test_corpus_media_scene_derived(small_corpus: Path, scene: str, missing: str
         fgf.render(path, spp=1, progress=False)
     msg = str(e.value)
     assert "\n" not in msg and missing in msg, msg
+
+
+# The emitter-in-medium scene lit by its area emitter only (the environment
+# removed): the per-seed image means of many seeds, so that a bias of a few
+# tenths of a percent shows. K = 128 seeds at 256 spp give a standard error
+# of the difference of about 0.085 % of the image mean. fgf is 0.55 %
+# brighter than Mitsuba's volpath here (z ≈ 6.5), from the `thindielectric`
+# spheres around the emitter; in a smaller scene of that kind (no medium)
+# fgf agrees with Mitsuba's `path` integrator, and Mitsuba's `volpath` does
+# not (docs/compatibility.md). A strict xfail, so that any change shows.
+EMITTER_ONLY_K = 128
+EMITTER_ONLY_SPP = 256
+
+
+@pytest.mark.slow
+@pytest.mark.xfail(strict=True, reason="fgf 0.55 % above Mitsuba's volpath (z 6.5): thin dielectrics around an emitter, docs/compatibility.md")
+def test_emitter_inside_medium_light_only_agrees_with_many_seeds(small_corpus: Path) -> None:
+    derived = derive(small_corpus / PM / "test_homo_emitter_inside_medium_volpath.xml")
+    scene = derived.with_name("emitter_only.xml")
+    text = derived.read_text().replace('<emitter type="constant"><rgb name="radiance" value="1"/></emitter>', "")
+    assert "<emitter type=\"area\">" in text and "constant" not in text
+    scene.write_text(text)
+    mine = np.array(
+        [
+            fgf.render(scene, spp=EMITTER_ONLY_SPP, seed=100000 + i, progress=False).mean(axis=(0, 1), dtype=np.float64)
+            for i in range(EMITTER_ONLY_K)
+        ]
+    )
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    sc = mi.load_file(str(scene))
+    theirs = np.array(
+        [
+            np.array(mi.render(sc, seed=i, spp=EMITTER_ONLY_SPP))[..., :3].mean(axis=(0, 1), dtype=np.float64)
+            for i in range(EMITTER_ONLY_K)
+        ]
+    )
+    ma, mb, se, t, _ = welch(mine, theirs)
+    msg = f"emitter only: fgf {ma} vs mitsuba {mb}, SE {se}, z {t}, relative {ma / mb - 1}"
+    print(msg)
+    assert (np.abs(t) <= Z_MEAN).all(), msg

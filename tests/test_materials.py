@@ -119,15 +119,109 @@ def test_bsdf_matches_mitsuba(tmp_path, name):
     compare(scene, scene)
 
 
-# fgf's roughplastic matches Mitsuba 3.9.1's BSDF value to 0.15 % at normal
-# incidence, but its diffuse lobe is up to 7 % brighter at grazing incidence
-# (cos θ_i = 0.05, against Mitsuba's BSDF.eval): the loader refuses it until
-# the coating transmittance is found.
-def test_roughplastic_is_refused_in_one_line(tmp_path):
-    scene = _write(tmp_path, "roughplastic", '<bsdf type="roughplastic"><float name="alpha" value="0.2"/></bsdf>')
-    with pytest.raises(fgf.FgfError, match="roughplastic is not supported yet") as e:
-        fgf.render(scene, spp=1)
-    assert "\n" not in str(e.value)
+def test_roughplastic_matches_mitsuba(tmp_path):
+    scene = _write(
+        tmp_path,
+        "roughplastic",
+        '<bsdf type="roughplastic"><float name="alpha" value="0.2"/>'
+        '<rgb name="diffuse_reflectance" value="0.6, 0.3, 0.1"/></bsdf>',
+    )
+    compare(scene, scene)
+
+
+# --- roughplastic's value and pdf against Mitsuba's BSDF.eval and BSDF.pdf ----
+
+ROUGHPLASTIC = {
+    "beckmann a=0.05": {"distribution": "beckmann", "alpha": 0.05},
+    "beckmann a=0.2": {"distribution": "beckmann", "alpha": 0.2},
+    "beckmann a=0.6 nonlinear": {"distribution": "beckmann", "alpha": 0.6, "nonlinear": True},
+    "beckmann a=0.3 all normals": {"distribution": "beckmann", "alpha": 0.3, "sample_visible": False},
+    "ggx a=0.1": {"distribution": "ggx", "alpha": 0.1},
+    "ggx a=0.4 ior 1.8 nonlinear": {"distribution": "ggx", "alpha": 0.4, "int_ior": 1.8, "nonlinear": True},
+    "ggx a=0.25 all normals": {"distribution": "ggx", "alpha": 0.25, "sample_visible": False},
+    "ggx a=0.3 ior 1.2/1.33": {"distribution": "ggx", "alpha": 0.3, "int_ior": 1.2, "ext_ior": 1.33},
+}
+DIFFUSE = (0.6, 0.3, 0.1)
+SPECULAR = (0.9, 0.8, 0.7)
+
+
+def _roughplastic_xml(params: dict) -> str:
+    props = []
+    for k, v in params.items():
+        if isinstance(v, bool):
+            props.append(f'<boolean name="{k}" value="{str(v).lower()}"/>')
+        elif isinstance(v, str):
+            props.append(f'<string name="{k}" value="{v}"/>')
+        else:
+            props.append(f'<float name="{k}" value="{v}"/>')
+    rgb = [f'<rgb name="{n}" value="{", ".join(map(str, c))}"/>' for n, c in (("diffuse_reflectance", DIFFUSE), ("specular_reflectance", SPECULAR))]
+    return '<bsdf type="roughplastic">' + "".join(props + rgb) + "</bsdf>"
+
+
+def _direction_grid() -> tuple[np.ndarray, np.ndarray]:
+    """Pairs (wi, wo) in the upper hemisphere: cosines from grazing (0.02)
+    to normal, azimuths around the mirror direction and away from it."""
+    cos = np.array([0.02, 0.05, 0.1, 0.2, 0.35, 0.5, 0.7, 0.85, 0.97, 1.0])
+    phis = np.radians([0.0, 37.0, 90.0, 150.0, 180.0])
+    wi, wo = [], []
+    for ci in cos:
+        si = np.sqrt(1 - ci * ci)
+        for co in cos:
+            so = np.sqrt(1 - co * co)
+            for phi in phis:
+                wi.append((si, 0.0, ci))
+                # phi = 180 degrees is the mirror direction's azimuth.
+                wo.append((so * np.cos(phi), so * np.sin(phi), co))
+    return np.array(wi, np.float32), np.array(wo, np.float32)
+
+
+def _mitsuba_eval_pdf(params: dict, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    mi = _mitsuba()
+    d = {"type": "roughplastic", **params}
+    d["diffuse_reflectance"] = {"type": "rgb", "value": list(DIFFUSE)}
+    d["specular_reflectance"] = {"type": "rgb", "value": list(SPECULAR)}
+    b = mi.load_dict(d)
+    ctx = mi.BSDFContext()
+    f, pdf = [], []
+    for a, o in zip(wi, wo):
+        si = mi.SurfaceInteraction3f()
+        si.n = mi.Normal3f(0, 0, 1)
+        si.sh_frame = mi.Frame3f(si.n)
+        si.wi = mi.Vector3f(*map(float, a))
+        v = mi.Vector3f(*map(float, o))
+        f.append(np.array(b.eval(ctx, si, v)))
+        pdf.append(float(b.pdf(ctx, si, v)))
+    return np.array(f), np.array(pdf)
+
+
+@pytest.mark.parametrize("name", sorted(ROUGHPLASTIC))
+def test_roughplastic_eval_and_pdf_match_mitsuba(tmp_path, name):
+    """fgf's `roughplastic` value and pdf against Mitsuba 3.9.1's on a grid
+    of 500 direction pairs, grazing ones (cos θ = 0.02) included. Both are
+    deterministic, and the coating tables are the same Gauss–Legendre
+    quadratures through the same visible-normal maps, so the value agrees to
+    f32 rounding (measured: ≤ 5e-6 relative; tolerance 1e-4), and so does
+    the pdf (≤ 2e-5), except for Beckmann with visible normals: there fgf's
+    pdf uses the exact Smith G1 (the density of the normals it samples)
+    where Mitsuba uses the rational fit of Walter et al., whose error is
+    below 0.35 % (measured: ≤ 2.9e-3; tolerance 3.6e-3)."""
+    params = ROUGHPLASTIC[name]
+    scene = tmp_path / "bsdf.xml"
+    scene.write_text(
+        '<scene version="3.0.0"><shape type="sphere">' + _roughplastic_xml(params) + "</shape></scene>"
+    )
+    wi, wo = _direction_grid()
+    f, pdf = fgf._core.bsdf_eval_pdf(str(scene), 0, wi, wo)
+    f_mi, pdf_mi = _mitsuba_eval_pdf(params, wi, wo)
+    scale = np.maximum(np.abs(f_mi), 1e-6)
+    rel = np.abs(f - f_mi) / scale
+    worst = np.unravel_index(np.argmax(rel), rel.shape)
+    assert rel.max() < 1e-4, f"{name}: value {f[worst]} vs Mitsuba {f_mi[worst]} at wi={wi[worst[0]]}, wo={wo[worst[0]]}"
+    beckmann_visible = params["distribution"] == "beckmann" and params.get("sample_visible", True)
+    tol = 3.6e-3 if beckmann_visible else 1e-4
+    rel_pdf = np.abs(pdf - pdf_mi) / np.maximum(pdf_mi, 1e-6)
+    k = int(np.argmax(rel_pdf))
+    assert rel_pdf.max() < tol, f"{name}: pdf {pdf[k]} vs Mitsuba {pdf_mi[k]} at wi={wi[k]}, wo={wo[k]}"
 
 
 def test_homogeneous_medium_in_rough_dielectric(tmp_path):

@@ -3,7 +3,7 @@ Mitsuba 3, against two oracles.
 
 * Exponential media (Mitsuba's ``homogeneous``; fgf white noise, which is
   exponential with ``σ̄ = σ g(k)``) under ``fgf_volpath`` against Mitsuba's
-  own ``volpath``, also with a BSDF fgf lacks (``roughplastic``).
+  own ``volpath``, also with Mitsuba's ``roughplastic`` in the scene.
 * Non-exponential media (pink noise, 2-fBm, Davis–Weinstein, both kernels,
   grey and RGB; the repository's reference scenes ``scenes/fgf-cube-*.xml``)
   under ``fgf_volpath`` against fgf's own renderer
@@ -326,7 +326,7 @@ ROUGH_SPHERE = (
 
 def test_white_noise_with_roughplastic_matches_volpath() -> None:
     """White noise is exponential with ``σ̄ = σ g(S_w/σ)`` for either kernel;
-    a roughplastic sphere (a BSDF fgf lacks) sits inside the medium."""
+    a roughplastic sphere (Mitsuba's own) sits inside the medium."""
     sigma, sw = 4.0, 4.0
     sigma_bar = fgf.Fgf(sigma, hurst=-0.5, sw=sw).sigma_bar
     for kernel in ("energy_conserving", "reciprocal"):

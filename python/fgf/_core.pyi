@@ -210,6 +210,16 @@ def render_scene(
 ) -> tuple[_F32Array, _F32Array | None, int, bool]:
     """Render a scene file: ``(image (H, W, 3) float32, variance or None, spp_done, interrupted)``."""
 
+def bsdf_eval_pdf(
+    scene: str,
+    shape: int,
+    wi: _F32Array,
+    wo: _F32Array,
+    defines: Sequence[tuple[str, str]] | None = None,
+) -> tuple[_F32Array, _F32Array]:
+    """The BSDF of shape ``shape`` at ``(n, 3)`` local-frame direction pairs (normal ``+z``):
+    ``(f(wi, wo)·|cos θ_o| (n, 3), pdf of sampling wo (n,))``, as Mitsuba's ``BSDF.eval``/``pdf``."""
+
 _U64Array: TypeAlias = npt.NDArray[np.uint64]
 
 class PreparedScene:

@@ -2,7 +2,9 @@
 //! `fgf.render`), `write_exr`, `write_png`, and the sample-range API behind
 //! `fgf.cluster`: `prepare_scene` (a compiled scene kept by a worker),
 //! `render_range` (the exact sums of samples `s0..s1`), `film_merge` and
-//! `film_finish` (`docs/theory.md` §7.17).
+//! `film_finish` (`docs/theory.md` §7.17); and `bsdf_eval_pdf`, a shape's
+//! BSDF evaluated in its local frame (for the tests against Mitsuba 3's
+//! `BSDF.eval`/`pdf`).
 
 use crate::errors::{io_err, ParameterError, SceneError};
 use crate::progress::run_job;
@@ -11,8 +13,8 @@ use fgf_render::render::Prepared;
 use fgf_render::{RenderError, RenderOptions};
 use fgf_scene::SceneErrorKind;
 use numpy::{
-    PyArray1, PyArrayMethods, PyReadonlyArray3, PyReadonlyArrayDyn, PyReadwriteArrayDyn,
-    PyUntypedArrayMethods,
+    PyArray1, PyArrayMethods, PyReadonlyArray2, PyReadonlyArray3, PyReadonlyArrayDyn,
+    PyReadwriteArrayDyn, PyUntypedArrayMethods,
 };
 use pyo3::exceptions::PyOSError;
 use pyo3::prelude::*;
@@ -387,7 +389,54 @@ fn write_png(
         .map_err(io_err)
 }
 
+/// `f(wi, wo)·|cos θ_o|` and the sampling pdf of `wo` for the BSDF of
+/// shape `shape` of a scene, at `n` pairs of local-frame directions
+/// (`(n, 3)` arrays; the normal is `+z`).
+#[pyfunction]
+#[pyo3(signature = (scene, shape, wi, wo, defines=None))]
+fn bsdf_eval_pdf<'py>(
+    py: Python<'py>,
+    scene: PathBuf,
+    shape: usize,
+    wi: PyReadonlyArray2<'py, f32>,
+    wo: PyReadonlyArray2<'py, f32>,
+    defines: Option<Vec<(String, String)>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let desc = load_scene(py, &scene, defines)?;
+    let Some(s) = desc.shapes.get(shape) else {
+        return Err(ParameterError::new_err(format!(
+            "shape = {shape}; the scene has {} shapes",
+            desc.shapes.len()
+        )));
+    };
+    let (wi, wo) = (wi.as_array(), wo.as_array());
+    if wi.ncols() != 3 || wo.shape() != wi.shape() {
+        return Err(ParameterError::new_err(format!(
+            "wi and wo must be (n, 3) arrays of the same shape, got {:?} and {:?}",
+            wi.shape(),
+            wo.shape()
+        )));
+    }
+    let bsdf = fgf_render::bsdf::Bsdf::from_desc(&desc.bsdfs[s.bsdf]);
+    let n = wi.nrows();
+    let (mut f, mut pdf) = (Vec::with_capacity(3 * n), Vec::with_capacity(n));
+    for k in 0..n {
+        // `Spectrum` is glam's `Vec3`, the renderer's direction type.
+        let v = |a: &numpy::ndarray::ArrayView2<f32>| {
+            fgf_render::spectrum::Spectrum::new(a[[k, 0]], a[[k, 1]], a[[k, 2]])
+        };
+        let (fk, pk) = bsdf.eval_pdf(v(&wi), v(&wo));
+        f.extend_from_slice(&[fk.x, fk.y, fk.z]);
+        pdf.push(pk);
+    }
+    Ok((
+        PyArray1::from_vec(py, f).reshape([n, 3])?.into_any(),
+        PyArray1::from_vec(py, pdf).into_any(),
+    ))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    m.add_function(wrap_pyfunction!(bsdf_eval_pdf, m)?)?;
     m.add_function(wrap_pyfunction!(render_scene, m)?)?;
     m.add_function(wrap_pyfunction!(write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_png, m)?)?;

@@ -41,6 +41,20 @@ fn rough_defaults_are_mitsubas() {
             ..
         }
     ));
+    match bsdf(r#"<bsdf type="roughplastic"><boolean name="nonlinear" value="true"/></bsdf>"#) {
+        BsdfDesc::Plastic {
+            int_ior,
+            ext_ior,
+            nonlinear,
+            microfacet,
+            ..
+        } => {
+            assert_eq!((int_ior, ext_ior), (1.49, 1.000277));
+            assert!(nonlinear);
+            assert_eq!(microfacet, Some(beckmann));
+        }
+        d => panic!("{d:?}"),
+    }
     assert!(matches!(
         bsdf(r#"<bsdf type="roughconductor"><string name="material" value="Au"/></bsdf>"#),
         BsdfDesc::RoughConductor {
@@ -65,9 +79,8 @@ fn refusals_name_the_parameter() {
         e.contains("invalid distribution = 'phong' (valid: beckmann, ggx)"),
         "{e}"
     );
-    // Refused until its diffuse lobe matches Mitsuba 3 at grazing angles.
-    let e = load(r#"<shape type="sphere"><bsdf type="roughplastic"/></shape>"#).unwrap_err();
-    assert!(e.contains("roughplastic is not supported yet"), "{e}");
+    let e = load(r#"<shape type="sphere"><bsdf type="roughplastic"><float name="alpha_u" value="0.2"/></bsdf></shape>"#).unwrap_err();
+    assert!(e.contains("alpha_u"), "{e}");
     assert_eq!(e.lines().count(), 1, "{e}");
     let e = load(r#"<emitter type="envmap"><string name="filename" value="sky.png"/></emitter>"#)
         .unwrap_err();

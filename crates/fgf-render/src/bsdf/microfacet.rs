@@ -18,6 +18,7 @@
 //! exact density of the sampled normals, and estimators stay unbiased with
 //! respect to the value.
 
+use crate::math::sample_concentric_disk;
 use glam::Vec3;
 use std::f32::consts::PI;
 
@@ -165,11 +166,13 @@ impl Microfacet {
             Vec3::X
         };
         let t2 = vh.cross(t1);
-        let r = u[0].sqrt();
-        let phi = 2.0 * PI * u[1];
-        let p1 = r * phi.cos();
+        // A uniform point on the unit disk (concentric map, as Mitsuba 3:
+        // the same distribution as the polar map, and the coating tables of
+        // `plastic.rs`, quadratures through this map, then agree with
+        // Mitsuba's to rounding), then squeezed onto the visible half.
+        let [p1, q] = sample_concentric_disk(u);
         let s = 0.5 * (1.0 + vh.z);
-        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * r * phi.sin();
+        let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * q;
         let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
         Vec3::new(self.ax * nh.x, self.ay * nh.y, nh.z.max(1e-6)).normalize()
     }

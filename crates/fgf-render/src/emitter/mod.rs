@@ -5,7 +5,14 @@
 //! a Python example) is the table at the head of [`fgf_scene::xml::emitters`];
 //! the notes here are about the implementation.
 //!
-//! * `area` (inside a shape): one-sided: emits toward the shape's normal side
+//! * `area` (inside a shape): one-sided: emits toward the side of the
+//!   shading normal (the interpolated vertex normal of a smooth mesh, else
+//!   the geometric one), and the light pdf converts area to solid angle
+//!   with that normal's cosine, as Mitsuba 3 does (its emitter and position
+//!   samples carry the shading frame). Near the silhouette of a
+//!   smooth-normal mesh this is not the geometric cosine, so the light's
+//!   expected contribution depends on the convention; fgf follows Mitsuba's
+//!   so that its scenes render to the same image
 //! * `spot`: full intensity inside `beam_width`, then falling linearly in the angle to 0 at `cutoff_angle` (measured against Mitsuba 3.9.1)
 //! * `constant`: uniform environment
 //! * `envmap`: an image of the environment, sampled by luminance ([`envmap`])
@@ -141,8 +148,8 @@ impl Emitter {
                 }
                 let dist = d2.sqrt();
                 let wi = v / dist;
-                let cos_l = -ps.n.dot(wi);
-                // One-sided: nothing toward the back of the light.
+                // One-sided (shading normal): nothing toward the back.
+                let cos_l = -ps.ns.dot(wi);
                 if cos_l <= 0.0 {
                     return None;
                 }

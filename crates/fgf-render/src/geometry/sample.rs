@@ -19,9 +19,17 @@ impl Geometry {
                 } else {
                     sample_uniform_triangle(u)
                 };
+                let ns = if t.normals != u32::MAX {
+                    let vn = &self.vertex_normals[t.normals as usize];
+                    let n = (1.0 - b[0] - b[1]) * vn[0] + b[0] * vn[1] + b[1] * vn[2];
+                    n.try_normalize().unwrap_or(t.n)
+                } else {
+                    t.n
+                };
                 PositionSample {
                     p: (t.v0 + b[0] * t.e1 + b[1] * t.e2).into(),
                     n: t.n,
+                    ns,
                 }
             }
             ShapeSampling::Sphere(i) => {
@@ -30,6 +38,7 @@ impl Geometry {
                 PositionSample {
                     p: s.center + s.radius * d,
                     n: d * s.sign,
+                    ns: d * s.sign,
                 }
             }
             ShapeSampling::Disk(i) => {
@@ -38,6 +47,7 @@ impl Geometry {
                 PositionSample {
                     p: d.to_world.transform_point3(Vec3::new(q[0], q[1], 0.0)),
                     n: d.n,
+                    ns: d.n,
                 }
             }
         }

@@ -94,7 +94,11 @@ pub(super) enum ShapeSampling {
 #[derive(Debug, Clone, Copy)]
 pub struct PositionSample {
     pub p: Vec3,
+    /// Unit geometric normal.
     pub n: Vec3,
+    /// Unit shading normal (interpolated vertex normals, else `n`), as
+    /// [`Hit::ns`].
+    pub ns: Vec3,
 }
 
 // Primitive references pack the kind in the top two bits.

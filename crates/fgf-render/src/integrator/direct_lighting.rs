@@ -59,7 +59,8 @@ impl World {
                     t_max = (t_max - h.t).max(0.0);
                     continue;
                 }
-                if h.n.dot(ray.d) < 0.0 {
+                // The front side is the shading normal's (see `Emitter::sample`).
+                if h.ns.dot(ray.d) < 0.0 {
                     if let Emitter::Area { radiance, .. } = self.emitters[e as usize] {
                         l += radiance;
                     }
@@ -141,7 +142,7 @@ impl World {
                     let Emitter::Area { radiance, shape } = self.emitters[e as usize] else {
                         continue;
                     };
-                    let cos_l = -h2.n.dot(wo);
+                    let cos_l = -h2.ns.dot(wo);
                     if !(cos_l > 0.0) {
                         continue;
                     }

@@ -159,15 +159,16 @@ impl World {
                 break;
             };
             let info = self.shapes[h.shape as usize];
-            // Emission of an area light seen from its front side.
+            // Emission of an area light seen from its front side (that of
+            // the shading normal, as in `Emitter::sample`).
             if let Some(e) = info.emitter {
-                if !(depth == 0 && self.hide_emitters) && h.n.dot(ray.d) < 0.0 {
+                if !(depth == 0 && self.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
                     if let Emitter::Area { radiance, shape } = self.emitters[e as usize] {
                         let w = if specular {
                             1.0
                         } else {
                             let d2 = (h.p - prev_p).length_squared();
-                            let cos_l = -h.n.dot(ray.d);
+                            let cos_l = -h.ns.dot(ray.d);
                             let light_pdf =
                                 self.select_pdf() * d2 / (cos_l * self.geom.areas[shape as usize]);
                             mis_power(prev_pdf, light_pdf)

@@ -3,9 +3,8 @@
 //! boundaries), `dielectric` (smooth), `thindielectric` (a thin smooth slab:
 //! reflects and passes straight through), `roughdielectric`, `conductor` (a
 //! smooth metal), `roughconductor`, `plastic` (a diffuse base under a
-//! dielectric coating, Mitsuba 3's model) and `twosided` (the nested BSDF on
-//! both sides). `roughplastic` is refused for now: its diffuse lobe is 7 %
-//! brighter than Mitsuba 3.9.1's at grazing incidence. The rough plugins use a microfacet
+//! dielectric coating, Mitsuba 3's model), `roughplastic` (the same under a
+//! rough coating) and `twosided` (the nested BSDF on both sides). The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
 //! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
 //! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
@@ -433,14 +432,6 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             }
         }
         "plastic" | "roughplastic" => {
-            if ty == "roughplastic" {
-                // The model is implemented, but its diffuse lobe is 7 %
-                // brighter than Mitsuba 3.9.1's at grazing incidence
-                // (cos θ = 0.05): refused rather than rendered wrong.
-                return Err(n.err(
-                    "roughplastic is not supported yet (its diffuse lobe does not match Mitsuba 3 at grazing angles); use plastic, or roughconductor for a glossy metal",
-                ));
-            }
             // Mitsuba's default interior: polypropylene.
             let (int_ior, ext_ior) = iors(&p, 1.49)?;
             if int_ior == ext_ior {

@@ -1,5 +1,6 @@
 //! `<emitter>`: `area` (nested in the `<shape>` that emits; it emits toward
-//! the side its normal points to), and at the top level `point`, `spot`,
+//! the side its normal points to: on a mesh with vertex normals, the
+//! interpolated shading normal, as in Mitsuba 3), and at the top level `point`, `spot`,
 //! `directional`, `constant` (a uniform environment) and `envmap` (an image
 //! of the environment; at most one environment emitter). Every
 //! colour is `≥ 0` in each channel; radiometric units are described in
