@@ -117,7 +117,11 @@ fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
         "vn" => Some(2),
         _ => None,
     };
-    let lines = || bytes.split(|&b| b == b'\n').map(|l| std::str::from_utf8(l).unwrap_or(""));
+    let lines = || {
+        bytes
+            .split(|&b| b == b'\n')
+            .map(|l| std::str::from_utf8(l).unwrap_or(""))
+    };
     let mut total = [0i64; 3];
     for line in lines() {
         if let Some(k) = line.split_whitespace().next().and_then(kind_of) {
@@ -140,7 +144,11 @@ fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
         for word in words {
             for (k, part) in word.split('/').take(3).enumerate() {
                 let Ok(x) = part.parse::<i64>() else { continue };
-                let ok = if x > 0 { x <= total[k] } else { x < 0 && x >= -so_far[k] };
+                let ok = if x > 0 {
+                    x <= total[k]
+                } else {
+                    x < 0 && x >= -so_far[k]
+                };
                 if !ok {
                     let have = if x > 0 { total[k] } else { so_far[k] };
                     return Err(format!(
@@ -165,8 +173,14 @@ mod tests {
         assert!(check_face_indices(ok).is_ok());
         for (obj, line) in [
             (&b"v 0 0 0\nf 1 2 3\n"[..], "line 2"),
-            (b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvt 0 0\nf 1/1 2/1 3/-9223372036854775808\n", "line 5"),
-            (b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvn 0 0 1\nf 1//1 2//1 3//6148914691236517206\n", "line 5"),
+            (
+                b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvt 0 0\nf 1/1 2/1 3/-9223372036854775808\n",
+                "line 5",
+            ),
+            (
+                b"v 0 0 0\nv 0 0 0\nv 0 0 0\nvn 0 0 1\nf 1//1 2//1 3//6148914691236517206\n",
+                "line 5",
+            ),
             (b"v 0 0 0\nf 0 1 1\n", "line 2"),
             (b"f -1 -1 -1\nv 0 0 0\n", "line 1"),
         ] {
