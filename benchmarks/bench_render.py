@@ -235,9 +235,14 @@ def scaling(args: argparse.Namespace) -> None:
     print("## instructions per sample of the render loop (callgrind, 1 thread unless said)")
     print(f"{'res':>5} {'spp':>5} {'threads':>7} {'instructions':>14} {'per sample':>11} {'hash':>17}")
     grid = [(32, 16, 1), (64, 16, 1), (128, 16, 1), (64, 4, 1), (64, 64, 1), (64, 16, 2)]
+    totals: dict[tuple[int, int, int], int] = {}
     for res, spp, threads in grid:
         c = callgrind(scene, spp, threads, [f"res={res}", f"max_depth={args.max_depth}"])
-        print(f"{res:5d} {spp:5d} {threads:7d} {c['instructions']:>14} {c['per-sample']:>11} {c['hash']:>17}")
+        totals[(res, spp, threads)] = int(c["instructions"])
+        # With more threads the workers' instructions are outside render_range's
+        # inclusive count: compare the totals with the 1-thread run instead.
+        per = c["per-sample"] if threads == 1 else f"{totals[(res, spp, threads)] / totals[(res, spp, 1)]:.4f}x 1t"
+        print(f"{res:5d} {spp:5d} {threads:7d} {c['instructions']:>14} {per:>11} {c['hash']:>17}")
 
 
 def main() -> int:

@@ -12,7 +12,9 @@
 #
 #   instructions <total> render <Prepared::render_range, inclusive> per-sample <render / samples> hash <image hash>
 #
-# Instruction counts do not depend on the machine's load, so two builds can be
+# `render` and `per-sample` count the thread that called render_range: use them
+# with 1 thread (with more, compare the totals). Instruction counts do not
+# depend on the machine's load, so two builds can be
 # compared while other jobs run; they repeat to about 1e-5 (the thread pool's
 # start-up varies a little). The hash is the FNV-1a hash of the image's bits
 # (the same for any thread count). Needs valgrind (Debian: apt-get install valgrind).
