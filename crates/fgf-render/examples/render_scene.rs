@@ -1,17 +1,19 @@
 //! Render a scene file from Rust, for profiling the renderer without Python:
 //!
 //! ```text
-//! cargo run --release -p fgf-render --example render_scene -- scene.xml [spp] [threads]
+//! cargo run --release -p fgf-render --example render_scene -- scene.xml [spp] [threads] [name=value]...
 //! ```
 //!
-//! Prints the wall time, samples per second, the image mean and a hash of
-//! the image's bits (to check that a change keeps images bit-identical).
+//! The `name=value` arguments are the scene's `-D` defines. Prints the wall
+//! time, samples per second, the image mean and a hash of the image's bits
+//! (to check that a change keeps images bit-identical);
+//! `benchmarks/callgrind.sh` runs it under callgrind.
 
 use std::process::ExitCode;
 
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
-    let usage = "usage: render_scene scene.xml [spp >= 1] [threads, 0 = all]";
+    let usage = "usage: render_scene scene.xml [spp >= 1] [threads, 0 = all] [name=value]...";
     let Some(path) = args.get(1) else {
         eprintln!("{usage}");
         return ExitCode::from(2);
@@ -23,7 +25,19 @@ fn main() -> ExitCode {
         eprintln!("{usage}");
         return ExitCode::from(2);
     };
-    let scene = match fgf_scene::load_file(path.as_ref(), &[]) {
+    let Some(defines) = args
+        .iter()
+        .skip(4)
+        .map(|d| {
+            d.split_once('=')
+                .map(|(k, v)| (k.to_string(), v.to_string()))
+        })
+        .collect::<Option<Vec<_>>>()
+    else {
+        eprintln!("{usage}");
+        return ExitCode::from(2);
+    };
+    let scene = match fgf_scene::load_file(path.as_ref(), &defines) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("error: {e}");
@@ -58,7 +72,7 @@ fn main() -> ExitCode {
         (h ^ v.to_bits() as u64).wrapping_mul(0x0100_0000_01b3)
     });
     println!(
-        "{t:.3} s  {:.3} M samples/s  mean {mean:.6}  hash {hash:016x}",
+        "{t:.3} s  {:.3} M samples/s  mean {mean:.6}  hash {hash:016x}  samples {n}",
         n / t / 1e6
     );
     ExitCode::SUCCESS

@@ -364,8 +364,9 @@ impl FilmState {
     }
 }
 
-/// Add one sample's radiance `l` to a pixel's three sums (and squares);
-/// `Err(channel, value)` if a channel leaves the accumulator's range.
+/// Add one sample's radiance `l` to a pixel's three sums (and squares)
+/// directly in [`Fixed`]; `Err(channel, value)` if a channel leaves the
+/// accumulator's range. [`accumulate_pending`] gives the same sums, cheaper.
 #[inline]
 pub fn accumulate(
     sum: &mut [Fixed],
@@ -384,6 +385,122 @@ pub fn accumulate(
             // Exact: an f32 squared fits in an f64.
             if !sq[c].add_f64(v * v) {
                 return Err((c, v));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The smallest f32 magnitude whose bits all lie at or above [`Fixed`]'s
+/// unit `2⁻⁹⁶` (24-bit mantissa): smaller nonzero samples are rounded.
+const ON_GRID: f32 = 1.0 / (1u128 << 73) as f32;
+/// The same for squares (48-bit mantissa, bits down to `2⁻⁹⁶`).
+const SQUARE_ON_GRID: f32 = 1.0 / (1u64 << 25) as f32;
+/// [`Fixed`]'s range, `|sum| < 2⁹⁵`.
+const FIXED_RANGE: f64 = (1u128 << 95) as f64;
+
+/// `s + v` and whether the f64 sum is exact and inside [`Fixed`]'s range:
+/// `t = fl(s + v)` is exact iff `t − s = v` and `t − v = s` in floating
+/// point (whichever of `s`, `v` is larger in magnitude, the difference
+/// from it is computed exactly: Dekker's Fast2Sum).
+#[inline(always)]
+fn exact_add(s: f64, v: f64) -> (f64, bool) {
+    let t = s + v;
+    // `&`, not `&&`: three compares without branches.
+    (t, (t - s == v) & (t - v == s) & (t.abs() < FIXED_RANGE))
+}
+
+/// Add the pending partial sum `p` to `f` (exact: `p` is a multiple of the
+/// unit below the range); `false` if `f` leaves the range.
+#[inline]
+fn flush_one(f: &mut Fixed, p: &mut f64) -> bool {
+    let ok = match Fixed::from_f64(*p) {
+        Some(x) => f.merge(&x),
+        None => false,
+    };
+    *p = 0.0;
+    ok
+}
+
+/// Add one sample's radiance `l` to a pixel's sums through f64 partial sums
+/// kept exact (`docs/theory.md` §7.17): `pending` (RGB, and
+/// `pending_sq` for the squares) hold the exact sum of the samples not yet
+/// in `sum` (`sum_sq`). A sample goes into `pending` when the f64 addition
+/// is exact and the sample lies on [`Fixed`]'s grid (`|v| ≥ 2⁻⁷³`, squares
+/// `≥ 2⁻²⁵`, or 0) — then `pending` is a multiple of the unit and moves to
+/// `sum` exactly; otherwise `pending` moves to `sum` and the sample is added
+/// by [`accumulate`], with its rounding. The sums are the integers
+/// [`accumulate`] alone would give, grouped differently, so their bits are
+/// the same. [`flush_pending`] must follow the last sample.
+///
+/// `Err(channel, value)` as [`accumulate`]'s if a channel leaves the range.
+#[inline]
+pub fn accumulate_pending(
+    sum: &mut [Fixed],
+    pending: &mut [f64; 3],
+    sq: Option<(&mut [Fixed], &mut [f64; 3])>,
+    l: Spectrum,
+) -> Result<(), (usize, f64)> {
+    let v = l.to_array();
+    let on_grid = |x: f32, min: f32| (x == 0.0) | (x.abs() >= min);
+    let (t0, e0) = exact_add(pending[0], v[0] as f64);
+    let (t1, e1) = exact_add(pending[1], v[1] as f64);
+    let (t2, e2) = exact_add(pending[2], v[2] as f64);
+    let fast =
+        e0 & e1 & e2 & on_grid(v[0], ON_GRID) & on_grid(v[1], ON_GRID) & on_grid(v[2], ON_GRID);
+    match sq {
+        None if fast => {
+            *pending = [t0, t1, t2];
+            Ok(())
+        }
+        Some((sum_sq, pending_sq)) => {
+            let w = v.map(|x| x as f64 * x as f64);
+            let (q0, f0) = exact_add(pending_sq[0], w[0]);
+            let (q1, f1) = exact_add(pending_sq[1], w[1]);
+            let (q2, f2) = exact_add(pending_sq[2], w[2]);
+            let fast_sq = f0
+                & f1
+                & f2
+                & on_grid(v[0], SQUARE_ON_GRID)
+                & on_grid(v[1], SQUARE_ON_GRID)
+                & on_grid(v[2], SQUARE_ON_GRID);
+            if fast & fast_sq {
+                *pending = [t0, t1, t2];
+                *pending_sq = [q0, q1, q2];
+                return Ok(());
+            }
+            flush_pending(sum, pending, Some((&mut *sum_sq, &mut *pending_sq)), l)?;
+            accumulate(sum, Some(sum_sq), l)
+        }
+        None => {
+            flush_pending(sum, pending, None, l)?;
+            accumulate(sum, None, l)
+        }
+    }
+}
+
+/// Move a pixel's pending partial sums (see [`accumulate_pending`]) into its
+/// [`Fixed`] sums; `Err(channel, value)` with `value` the pending sum (or
+/// the sample `l` being added, if not zero) if a sum leaves the range.
+#[cold]
+pub fn flush_pending(
+    sum: &mut [Fixed],
+    pending: &mut [f64; 3],
+    sq: Option<(&mut [Fixed], &mut [f64; 3])>,
+    l: Spectrum,
+) -> Result<(), (usize, f64)> {
+    let report = |c: usize, p: f64| if l[c] != 0.0 { l[c] as f64 } else { p };
+    for c in 0..3 {
+        let p = pending[c];
+        if !flush_one(&mut sum[c], &mut pending[c]) {
+            return Err((c, report(c, p)));
+        }
+    }
+    if let Some((sum_sq, pending_sq)) = sq {
+        for c in 0..3 {
+            let p = pending_sq[c];
+            if !flush_one(&mut sum_sq[c], &mut pending_sq[c]) {
+                return Err((c, report(c, p.sqrt())));
             }
         }
     }
@@ -412,6 +529,113 @@ fn gaussian(x: f32, stddev: f32, radius: f32) -> f32 {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// f32 values over every exponent (normal and subnormal, both signs),
+    /// with mantissas from a fixed hash: the edge ones and 64 others each.
+    fn f32_values() -> Vec<f32> {
+        let mut out = vec![0.0, -0.0, f32::MIN_POSITIVE, f32::MAX];
+        let mut h = 0x9e37_79b9_7f4a_7c15u64;
+        for e8 in 0..255u32 {
+            for j in 0..68u32 {
+                h = fgf_core::rng::mix64(h);
+                let frac = match j {
+                    0 => 0,
+                    1 => 1,
+                    2 => 0x7f_ffff,
+                    3 => 0x40_0000,
+                    _ => (h as u32) & 0x7f_ffff,
+                };
+                let sign = ((h >> 40) as u32 & 1) << 31;
+                out.push(f32::from_bits(sign | (e8 << 23) | frac));
+            }
+        }
+        out
+    }
+
+    /// Samples drawn from `vals` by a fixed hash, `len` of them.
+    fn spectra(vals: &[f32], len: usize, mut h: u64) -> Vec<Spectrum> {
+        (0..len)
+            .map(|_| {
+                let mut c = [0f32; 3];
+                for x in &mut c {
+                    h = fgf_core::rng::mix64(h);
+                    *x = vals[(h % vals.len() as u64) as usize];
+                }
+                Spectrum::from_array(c)
+            })
+            .collect()
+    }
+
+    /// Sums through the f64 partial sums, flushed every `pass` samples.
+    fn pending_sums(spectra: &[Spectrum], pass: usize, squares: bool) -> ([Fixed; 3], [Fixed; 3]) {
+        let (mut s, mut q) = ([Fixed::default(); 3], [Fixed::default(); 3]);
+        let (mut p, mut pq) = ([0f64; 3], [0f64; 3]);
+        for part in spectra.chunks(pass) {
+            for &l in part {
+                let sq = squares.then_some((&mut q[..], &mut pq));
+                accumulate_pending(&mut s, &mut p, sq, l).unwrap();
+            }
+            let sq = squares.then_some((&mut q[..], &mut pq));
+            flush_pending(&mut s, &mut p, sq, Spectrum::ZERO).unwrap();
+        }
+        (s, q)
+    }
+
+    /// Sums (squares too) through the exact f64 partial sums are
+    /// bit-identical to sample-by-sample ones, for samples on and off the
+    /// grid and of any magnitude, and any flush points.
+    #[test]
+    fn pending_sums_are_the_fixed_sums() {
+        let all: Vec<f32> = f32_values()
+            .into_iter()
+            .filter(|v| v.abs() < 1e12)
+            .collect();
+        // Radiance-like: nonnegative, within a few decades (the fast path).
+        let typical: Vec<f32> = all
+            .iter()
+            .map(|v| v.abs())
+            .filter(|v| *v == 0.0 || (1e-6..1e3).contains(v))
+            .collect();
+        for (vals, seed) in [(&all, 1u64), (&typical, 2)] {
+            for len in [1usize, 2, 63, 64, 65, 1000] {
+                let spectra = spectra(vals, len, seed ^ len as u64);
+                let (mut s0, mut q0) = ([Fixed::default(); 3], [Fixed::default(); 3]);
+                for &l in &spectra {
+                    accumulate(&mut s0, Some(&mut q0), l).unwrap();
+                }
+                for pass in [1usize, 2, 7, 64, 1000] {
+                    assert_eq!(
+                        pending_sums(&spectra, pass, true),
+                        (s0, q0),
+                        "{len}, {pass}"
+                    );
+                    assert_eq!(pending_sums(&spectra, pass, false).0, s0, "{len}, {pass}");
+                }
+            }
+        }
+    }
+
+    /// A sum leaving the range is an error naming the sample that took it
+    /// there, as sample by sample.
+    #[test]
+    fn pending_sums_report_out_of_range() {
+        let big = Spectrum::splat(1e28);
+        let (mut s, mut p) = ([Fixed::default(); 3], [0f64; 3]);
+        let mut err = None;
+        for _ in 0..8 {
+            if let Err(e) = accumulate_pending(&mut s, &mut p, None, big) {
+                err = Some(e);
+                break;
+            }
+        }
+        assert_eq!(err, Some((0, 1e28f32 as f64)));
+        // Squares: 2^48 squared is 2^96, over the range at once.
+        let (mut s, mut p) = ([Fixed::default(); 3], [0f64; 3]);
+        let (mut q, mut pq) = ([Fixed::default(); 3], [0f64; 3]);
+        let l = Spectrum::splat(f32::powi(2.0, 48));
+        let r = accumulate_pending(&mut s, &mut p, Some((&mut q, &mut pq)), l);
+        assert_eq!(r, Err((0, f64::powi(2.0, 48))));
+    }
 
     /// The weighted histogram of sampled offsets reproduces the normalised
     /// filter (binned; the sampling is exact up to the 1024-bin table, which

@@ -23,8 +23,11 @@
 //! ```
 
 use crate::error::RenderError;
-use crate::film::{accumulate, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS};
+use crate::film::{
+    accumulate_pending, flush_pending, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS,
+};
 use crate::math::Sampler;
+use crate::spectrum::Spectrum;
 use crate::world::World;
 use fgf_core::Progress;
 use fgf_scene::SceneDesc;
@@ -100,27 +103,32 @@ impl Prepared {
             .unwrap_or_else(|| ((1usize << 18) / (w * h)).clamp(1, 64) as u32)
             .clamp(1, count);
         let mut state = FilmState::new(w, h, variance);
+        // Exact f64 partial sums of the samples not yet in `state`
+        // (`film::accumulate_pending`), moved into it at the end.
+        let mut pending = vec![[0f64; 3]; w * h];
+        let mut pending_sq = vec![[0f64; 3]; if variance { w * h } else { 0 }];
         let seed_key = Sampler::seed_key(seed);
         let mut next = samples.start;
+        let out_of_range =
+            |x: usize, y: usize, (channel, value): (usize, f64)| RenderError::OutOfRange {
+                x,
+                y,
+                channel,
+                value,
+                limit: f64::powi(2.0, 191 - FIXED_FRAC_BITS),
+            };
         while next < samples.end {
             if progress.cancelled() {
-                return Ok(state);
+                break;
             }
             let n = per_pass.min(samples.end - next);
             let first = next;
-            let sq_rows: Vec<Option<&mut [Fixed]>> = match state.sum_sq.as_mut() {
-                Some(v) => v.chunks_mut(w * 3).map(Some).collect(),
-                None => (0..h).map(|_| None).collect(),
-            };
-            state
-                .sum
-                .par_chunks_mut(w * 3)
-                .zip(sq_rows.into_par_iter())
-                .enumerate()
-                .try_for_each(|(y, (row, mut sq_row))| {
+            rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
+                |(y, (row, pend), mut sq)| {
                     for x in 0..w {
                         let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);
                         let px = &mut row[3 * x..3 * x + 3];
+                        let pp = &mut pend[x];
                         for k in first..first + n {
                             let mut s = Sampler::for_sample(pixel_key, k as u64);
                             let (fx, fy, weight) = self
@@ -133,26 +141,65 @@ impl Prepared {
                             if !l.is_finite() {
                                 l = crate::spectrum::Spectrum::ZERO;
                             }
-                            let sq = sq_row.as_deref_mut().map(|r| &mut r[3 * x..3 * x + 3]);
-                            accumulate(px, sq, l).map_err(|(channel, value)| {
-                                RenderError::OutOfRange {
-                                    x,
-                                    y,
-                                    channel,
-                                    value,
-                                    limit: f64::powi(2.0, 191 - FIXED_FRAC_BITS),
-                                }
-                            })?;
+                            let q = sq
+                                .as_mut()
+                                .map(|(a, b)| (&mut a[3 * x..3 * x + 3], &mut b[x]));
+                            accumulate_pending(px, pp, q, l).map_err(|e| out_of_range(x, y, e))?;
                         }
                     }
                     progress.inc((w as u64) * n as u64);
                     Ok::<(), RenderError>(())
-                })?;
+                },
+            )?;
             next += n;
             state.samples += n as u64;
         }
+        rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
+            |(y, (row, pend), mut sq)| {
+                for x in 0..w {
+                    let q = sq
+                        .as_mut()
+                        .map(|(a, b)| (&mut a[3 * x..3 * x + 3], &mut b[x]));
+                    let (px, pp) = (&mut row[3 * x..3 * x + 3], &mut pend[x]);
+                    flush_pending(px, pp, q, Spectrum::ZERO).map_err(|e| out_of_range(x, y, e))?;
+                }
+                Ok::<(), RenderError>(())
+            },
+        )?;
         Ok(state)
     }
+}
+
+/// The rows of `state`'s sums with their pending partial sums, in parallel:
+/// `(y, (sums, pending), Some((sums of squares, pending squares)))`.
+#[allow(clippy::type_complexity)]
+fn rows<'a>(
+    state: &'a mut FilmState,
+    pending: &'a mut [[f64; 3]],
+    pending_sq: &'a mut [[f64; 3]],
+    w: usize,
+) -> impl IndexedParallelIterator<
+    Item = (
+        usize,
+        (&'a mut [Fixed], &'a mut [[f64; 3]]),
+        Option<(&'a mut [Fixed], &'a mut [[f64; 3]])>,
+    ),
+> {
+    let sq_rows: Vec<Option<(&mut [Fixed], &mut [[f64; 3]])>> = match state.sum_sq.as_mut() {
+        Some(v) => v
+            .chunks_mut(w * 3)
+            .zip(pending_sq.chunks_mut(w))
+            .map(Some)
+            .collect(),
+        None => (0..state.height).map(|_| None).collect(),
+    };
+    state
+        .sum
+        .par_chunks_mut(w * 3)
+        .zip(pending.par_chunks_mut(w))
+        .zip(sq_rows.into_par_iter())
+        .enumerate()
+        .map(|(y, (row, sq))| (y, row, sq))
 }
 
 /// Render `scene`; see the module docs.

@@ -121,7 +121,7 @@ impl Emitter {
     /// For an environment emitter: the radiance arriving along a ray that
     /// escapes in direction `d`, and the solid-angle pdf with which
     /// [`Self::sample`] picks `d` (for MIS).
-    #[inline]
+    #[inline(always)]
     pub fn environment(&self, d: Vec3) -> Option<(Spectrum, f32)> {
         match self {
             Emitter::Constant { radiance } => Some((*radiance, UNIFORM_SPHERE_PDF)),

@@ -98,7 +98,7 @@ impl Scatterer for SurfaceVertex<'_> {
     fn point(&self) -> Vec3 {
         self.hit.p
     }
-    #[inline]
+    #[inline(always)]
     fn toward(&self, wi: Vec3) -> Option<(Spectrum, f32)> {
         let (f, pdf) = self.bsdf.eval_pdf(self.wi_local, self.frame.to_local(wi));
         (f != Spectrum::ZERO).then_some((f, pdf))
