@@ -56,6 +56,11 @@ pub struct World {
     /// `Some((emitter_samples, bsdf_samples))` for Mitsuba's `direct`
     /// integrator; `None` for `path` and `volpath`.
     pub direct_samples: Option<(u32, u32)>,
+    /// A `thindielectric`'s straight-through transmission is an
+    /// index-matched crossing that costs no depth (`volpath`, as Mitsuba's
+    /// volpath treats that lobe as a null interaction); under `path` it is
+    /// a bounce like any other, as in Mitsuba's `path`.
+    pub thin_is_crossing: bool,
     /// Some shape has a `null` BSDF: paths then ask for the two nearest
     /// hits, so that crossing the boundary needs no second traversal.
     pub(crate) any_null: bool,
@@ -134,6 +139,7 @@ impl World {
                 } => Some((emitter_samples, bsdf_samples)),
                 _ => None,
             },
+            thin_is_crossing: desc.integrator.kind == fgf_scene::IntegratorKind::Volpath,
         })
     }
 

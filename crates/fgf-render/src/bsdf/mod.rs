@@ -297,8 +297,9 @@ impl Bsdf {
     }
 
     /// `thindielectric`: its transmission leaves the direction unchanged, so
-    /// the path tracer counts it as an index-matched crossing (no depth), as
-    /// Mitsuba 3's volpath counts its `Null` lobe.
+    /// under `volpath` the path tracer counts it as an index-matched crossing
+    /// (no depth), as Mitsuba 3's volpath counts its `Null` lobe
+    /// ([`crate::World::thin_is_crossing`]).
     #[inline]
     pub fn is_thin(&self) -> bool {
         matches!(self.kind, BsdfKind::ThinDielectric { .. })

@@ -161,8 +161,9 @@ pub struct RoughPlastic {
     pub c: Coated,
     pub distr: Microfacet,
     /// Coating transmittance `T(μ)` ([`lobe_transmittance`]) at
-    /// `μ_i = max(1e-6, i/63)`.
-    pub t_ext: Box<[f32; TABLE_RES]>,
+    /// `μ_i = max(1e-6, i/63)`. Shared, so that a textured BSDF's
+    /// per-hit copy ([`super::Bsdf::at`]) does not allocate.
+    pub t_ext: std::sync::Arc<[f32; TABLE_RES]>,
 }
 
 /// Gauss–Legendre nodes and weights of order `n` on `[0, 1]` (Newton on
@@ -283,7 +284,7 @@ impl RoughPlastic {
         RoughPlastic {
             c: Coated::new(eta, diffuse, specular, nonlinear, f_int),
             distr,
-            t_ext,
+            t_ext: t_ext.into(),
         }
     }
 

@@ -213,9 +213,10 @@ impl World {
             };
             // This interaction would be event number depth + 1: nothing it
             // leads to can contribute unless depth + 1 < max_depth.
-            // A thin dielectric's transmission does not count (see below),
+            // A thin dielectric's transmission may not count (see below),
             // so its sample is drawn first and the test made after it.
-            if depth + 1 >= self.max_depth && !bsdf.is_thin() {
+            let thin_crossings = self.thin_is_crossing && bsdf.is_thin();
+            if depth + 1 >= self.max_depth && !thin_crossings {
                 break;
             }
             let frame = Frame::from_normal(h.ns);
@@ -237,10 +238,11 @@ impl World {
             let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
                 break;
             };
-            // Transmission through a thin dielectric keeps the direction: an
-            // index-matched crossing, not a scattering event (Mitsuba's
-            // volpath gives it no depth either).
-            let crossing = bsdf.is_thin() && bs.wo.z * wi_local.z < 0.0;
+            // Transmission through a thin dielectric keeps the direction:
+            // under volpath an index-matched crossing, not a scattering
+            // event (Mitsuba's volpath gives it no depth either); under
+            // path a bounce, as in Mitsuba's path.
+            let crossing = thin_crossings && bs.wo.z * wi_local.z < 0.0;
             if !crossing && depth + 1 >= self.max_depth {
                 break;
             }
