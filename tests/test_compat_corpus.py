@@ -50,48 +50,37 @@ SCENES: list[tuple[str, str | None]] = [
     (f"{MD}/docs/scenes/sampler_orthogonal_25spp.xml", None),
     (f"{MD}/docs/scenes/sampler_ldsampler_16spp.xml", None),
     (f"{MD}/scenes/matpreview/matpreview.xml", None),
-    (f"{MD}/tests/scenes/participating_media/test_homo_emitter_inside_medium_volpath.xml", "roughplastic"),
-    (f"{MD}/tests/scenes/participating_media/test_hetero_sigmat_volpath.xml", None),
-    (f"{MD}/tests/scenes/participating_media/test_homo_area_light_volpath.xml", None),
 ]
 
-# Mitsuba's participating-media regression scenes light everything with an
-# `envmap` and give the background a `checkerboard`, which another branch
-# adds. Until then each is also rendered *derived*: the envmap replaced by a
-# constant white sky and the checkerboard by a grey 0.5 (the same edit for
-# both renderers), which keeps what the scenes test, the media.
+# Mitsuba's 12 participating-media regression scenes, as they are: an
+# `envmap` lights them and a `checkerboard` covers the background.
 PM = f"{MD}/tests/scenes/participating_media"
-DERIVED: list[tuple[str, str | None]] = [
-    (f"{PM}/test_hetero_sigmat_albedo_volpath.xml", None),
-    (f"{PM}/test_hetero_sigmat_volpath.xml", None),
-    (f"{PM}/test_hetero_spectral_sigmat_no_scattering_volpath.xml", None),
-    (f"{PM}/test_hetero_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_homo_area_light_volpath.xml", None),
-    (f"{PM}/test_homo_dielectric_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_emitter_inside_medium_volpath.xml", None),
-    (f"{PM}/test_homo_null_envmap_volpath.xml", None),
-    (f"{PM}/test_homo_obj_inside_medium_volpath.xml", None),
-    (f"{PM}/test_homo_roughdielectric_spot_volpath.xml", None),
-    (f"{PM}/test_homo_spectral_sigmat_volpathmis.xml", None),
-    (f"{PM}/test_surf_area_light_volpath.xml", None),
+# fgf's red channel is above Mitsuba's here: +0.37 % at K = 16 x 16 spp
+# (z 3.8), +0.22 % over 256 seeds x 16 spp (z 3.1), +0.07 % over 64 x 64
+# (z 1.1); the derived scene (constant sky, grey background) agrees. Not
+# yet settled (docs/compatibility.md): an expected failure, strict, so that
+# agreement shows, and only an assertion counts as the expected failure.
+SPECTRAL_XFAIL = pytest.mark.xfail(
+    strict=True, raises=AssertionError, reason="fgf +0.2 % red against Mitsuba (z 3): open, docs/compatibility.md"
+)
+SCENES += [
+    (f"{PM}/{name}.xml", None)
+    for name in (
+        "test_hetero_sigmat_albedo_volpath",
+        "test_hetero_sigmat_volpath",
+        "test_hetero_spectral_sigmat_no_scattering_volpath",
+        "test_hetero_spectral_sigmat_volpathmis",
+        "test_homo_area_light_volpath",
+        "test_homo_dielectric_envmap_volpath",
+        "test_homo_emitter_inside_medium_volpath",
+        "test_homo_null_envmap_volpath",
+        "test_homo_obj_inside_medium_volpath",
+        "test_homo_roughdielectric_spot_volpath",
+        "test_homo_spectral_sigmat_volpathmis",
+        "test_surf_area_light_volpath",
+    )
 ]
 ENVMAP = re.compile(r"<emitter\s+type=[\"']envmap[\"'][^>]*>.*?</emitter>", re.S)
-CHECKER = re.compile(r"<texture\s+type=[\"']checkerboard[\"']\s+name=[\"'](\w+)[\"'][^>]*>.*?</texture>", re.S)
-
-
-def derive(xml: Path) -> Path:
-    """The derived scene next to `xml` (relative paths keep working), with
-    derived copies of the base scenes it includes."""
-    out = xml.with_name(xml.stem + "_derived.xml")
-    if not out.exists():
-        for base in (xml.parent / "include").glob("test-scene-base*.xml"):
-            if not base.stem.endswith("_derived"):
-                derived = CHECKER.sub(r'<rgb name="\1" value="0.5"/>', base.read_text())
-                base.with_name(base.stem + "_derived.xml").write_text(derived)
-        text = ENVMAP.sub('<emitter type="constant"><rgb name="radiance" value="1"/></emitter>', xml.read_text())
-        text = re.sub(r"(include/test-scene-base[\w-]*)\.xml", r"\1_derived.xml", text)
-        out.write_text(text)
-    return out
 
 
 FILM_SIZE = re.compile(r'(<integer\s+name\s*=\s*["\'](?:width|height)["\']\s+value\s*=\s*["\'])[^"\']*(["\'])')
@@ -112,7 +101,13 @@ def test_corpus_has_at_least_20_scenes_and_most_render() -> None:
     assert all((CORPUS / s).exists() for s, _ in SCENES)
 
 
-@pytest.mark.parametrize("scene,missing", SCENES, ids=[Path(s).stem for s, _ in SCENES])
+CASES = [
+    pytest.param(s, m, id=Path(s).stem, marks=[SPECTRAL_XFAIL] if s.endswith("test_homo_spectral_sigmat_volpathmis.xml") else [])
+    for s, m in SCENES
+]
+
+
+@pytest.mark.parametrize("scene,missing", CASES)
 def test_corpus_scene(small_corpus: Path, scene: str, missing: str | None) -> None:
     path = small_corpus / scene
     if missing is None:
@@ -125,37 +120,26 @@ def test_corpus_scene(small_corpus: Path, scene: str, missing: str | None) -> No
     assert missing in msg, msg
 
 
-@pytest.mark.parametrize("scene,missing", DERIVED, ids=[Path(s).stem for s, _ in DERIVED])
-def test_corpus_media_scene_derived(small_corpus: Path, scene: str, missing: str | None) -> None:
-    path = derive(small_corpus / scene)
-    if missing is None:
-        compare(path, {}, SPP)
-        return
-    with pytest.raises(fgf.SceneError) as e:
-        fgf.render(path, spp=1, progress=False)
-    msg = str(e.value)
-    assert "\n" not in msg and missing in msg, msg
-
-
-# The emitter-in-medium scene lit by its area emitter only (the environment
+# The emitter-in-medium scene lit by its area emitter only (the envmap
 # removed): the per-seed image means of many seeds, so that a bias of a few
 # tenths of a percent shows. K = 128 seeds at 256 spp give a standard error
 # of the difference of about 0.085 % of the image mean. fgf is 0.55 %
 # brighter than Mitsuba's volpath here (z ≈ 6.5), from the `thindielectric`
-# spheres around the emitter; in a smaller scene of that kind (no medium)
-# fgf agrees with Mitsuba's `path` integrator, and Mitsuba's `volpath` does
-# not (docs/compatibility.md). A strict xfail, so that any change shows.
+# spheres around the emitter; in a smaller scene of that kind fgf agrees
+# with Mitsuba's `path` integrator, and Mitsuba's `volpath` does not
+# (docs/compatibility.md). The test fails if the two come to agree (then
+# the docs and this test need updating) and is marked an expected failure
+# while they disagree; a failure of its own set-up is an ordinary failure.
 EMITTER_ONLY_K = 128
 EMITTER_ONLY_SPP = 256
 
 
 @pytest.mark.slow
-@pytest.mark.xfail(strict=True, reason="fgf 0.55 % above Mitsuba's volpath (z 6.5): thin dielectrics around an emitter, docs/compatibility.md")
-def test_emitter_inside_medium_light_only_agrees_with_many_seeds(small_corpus: Path) -> None:
-    derived = derive(small_corpus / PM / "test_homo_emitter_inside_medium_volpath.xml")
-    scene = derived.with_name("emitter_only.xml")
-    text = derived.read_text().replace('<emitter type="constant"><rgb name="radiance" value="1"/></emitter>', "")
-    assert "<emitter type=\"area\">" in text and "constant" not in text
+def test_emitter_inside_medium_light_only_against_many_seeds(small_corpus: Path) -> None:
+    original = small_corpus / PM / "test_homo_emitter_inside_medium_volpath.xml"
+    text, n = ENVMAP.subn("", original.read_text())
+    assert n == 1 and '<emitter type="area">' in text
+    scene = original.with_name("emitter_only.xml")
     scene.write_text(text)
     mine = np.array(
         [
@@ -176,4 +160,6 @@ def test_emitter_inside_medium_light_only_agrees_with_many_seeds(small_corpus: P
     ma, mb, se, t, _ = welch(mine, theirs)
     msg = f"emitter only: fgf {ma} vs mitsuba {mb}, SE {se}, z {t}, relative {ma / mb - 1}"
     print(msg)
-    assert (np.abs(t) <= Z_MEAN).all(), msg
+    if (np.abs(t) <= Z_MEAN).all():
+        pytest.fail(f"fgf now agrees with Mitsuba's volpath here; update docs/compatibility.md and this test ({msg})")
+    pytest.xfail(f"known: fgf above Mitsuba's volpath through thin dielectrics ({msg})")
