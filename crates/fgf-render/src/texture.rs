@@ -81,9 +81,7 @@ impl Texture {
                 color1,
                 to_uv,
             } => {
-                let q = to_uv.transform_point2(uv);
-                let f = q - q.floor();
-                if (f.x > 0.5) == (f.y > 0.5) {
+                if checker_first(to_uv, uv) {
                     *color0
                 } else {
                     *color1
@@ -130,9 +128,7 @@ impl Texture {
                 color1,
                 to_uv,
             } => {
-                let q = to_uv.transform_point2(uv);
-                let f = q - q.floor();
-                let c = if (f.x > 0.5) == (f.y > 0.5) {
+                let c = if checker_first(to_uv, uv) {
                     color1
                 } else {
                     color0
@@ -142,6 +138,15 @@ impl Texture {
             Texture::Bitmap { .. } => luminance(&self.eval(uv).to_array()),
         }
     }
+}
+
+/// A checkerboard's square at `uv`: `true` where `color0` lies (the
+/// fractional parts of both mapped coordinates on the same side of ½).
+#[inline]
+fn checker_first(to_uv: &Affine2, uv: Vec2) -> bool {
+    let q = to_uv.transform_point2(uv);
+    let f = q - q.floor();
+    (f.x > 0.5) == (f.y > 0.5)
 }
 
 #[cfg(test)]

@@ -70,14 +70,8 @@ impl World {
         };
         let info = self.shapes[h.shape as usize];
         let bsdf = &self.bsdfs[info.bsdf as usize];
-        let textured;
-        let bsdf = match bsdf.textures {
-            None => bsdf,
-            Some(_) => {
-                textured = bsdf.at(self.geom.uv(&h));
-                &textured
-            }
-        };
+        let bsdf = self.bsdf_at(bsdf, &h);
+        let bsdf = &*bsdf;
         let total = (n_e + n_b) as f32;
         let (c_e, c_b) = (n_e as f32 / total, n_b as f32 / total);
         let frame = Frame::from_normal(h.ns);

@@ -26,6 +26,7 @@
 mod direct;
 mod direct_lighting;
 
+use crate::bsdf::Bsdf;
 use crate::emitter::Emitter;
 use crate::geometry::Hit;
 use crate::math::{mis_power, Frame, Sampler};
@@ -34,6 +35,7 @@ use crate::ray::{offset_point, Ray};
 use crate::spectrum::{max_comp, Spectrum};
 use crate::world::World;
 use direct::{MediumVertex, SurfaceVertex};
+use std::borrow::Cow;
 
 /// What an earlier query already says about the nearest hit of a ray.
 #[derive(Debug, Clone, Copy)]
@@ -46,6 +48,16 @@ enum Known<T> {
 }
 
 impl World {
+    /// The BSDF at hit `h`: a textured BSDF is made concrete at the hit's
+    /// texture coordinates, which are computed only then.
+    #[inline(always)]
+    pub(crate) fn bsdf_at<'a>(&'a self, bsdf: &'a Bsdf, h: &Hit) -> Cow<'a, Bsdf> {
+        match bsdf.textures {
+            None => Cow::Borrowed(bsdf),
+            Some(_) => Cow::Owned(bsdf.at(self.geom.uv(h))),
+        }
+    }
+
     /// Radiance arriving at the camera along `ray` (one sample).
     pub fn li(&self, mut ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
         if let Some((n_e, n_b)) = self.direct_samples {
@@ -201,16 +213,8 @@ impl World {
                 start = SegmentStart::Surface;
                 continue;
             }
-            // A textured BSDF is made concrete at the hit's texture
-            // coordinates, which are computed only here.
-            let textured;
-            let bsdf = match bsdf.textures {
-                None => bsdf,
-                Some(_) => {
-                    textured = bsdf.at(self.geom.uv(&h));
-                    &textured
-                }
-            };
+            let bsdf = self.bsdf_at(bsdf, &h);
+            let bsdf = &*bsdf;
             // This interaction would be event number depth + 1: nothing it
             // leads to can contribute unless depth + 1 < max_depth.
             // A thin dielectric's transmission may not count (see below),
