@@ -410,6 +410,21 @@ fn exact_add(s: f64, v: f64) -> (f64, bool) {
     (t, (t - s == v) & (t - v == s) & (t.abs() < FIXED_RANGE))
 }
 
+/// [`exact_add`] per channel: the three sums, and whether all three are
+/// exact and every sample `x` (whose f64 value, or square, is `v`) lies on
+/// the grid (`0` or `|x| ≥ min`).
+#[inline(always)]
+fn exact_add3(pending: &[f64; 3], v: [f64; 3], x: [f32; 3], min: f32) -> ([f64; 3], bool) {
+    let on_grid = |x: f32| (x == 0.0) | (x.abs() >= min);
+    let (t0, e0) = exact_add(pending[0], v[0]);
+    let (t1, e1) = exact_add(pending[1], v[1]);
+    let (t2, e2) = exact_add(pending[2], v[2]);
+    (
+        [t0, t1, t2],
+        e0 & e1 & e2 & on_grid(x[0]) & on_grid(x[1]) & on_grid(x[2]),
+    )
+}
+
 /// Add the pending partial sum `p` to `f` (exact: `p` is a multiple of the
 /// unit below the range); `false` if `f` leaves the range.
 #[inline]
@@ -442,31 +457,18 @@ pub fn accumulate_pending(
     l: Spectrum,
 ) -> Result<(), (usize, f64)> {
     let v = l.to_array();
-    let on_grid = |x: f32, min: f32| (x == 0.0) | (x.abs() >= min);
-    let (t0, e0) = exact_add(pending[0], v[0] as f64);
-    let (t1, e1) = exact_add(pending[1], v[1] as f64);
-    let (t2, e2) = exact_add(pending[2], v[2] as f64);
-    let fast =
-        e0 & e1 & e2 & on_grid(v[0], ON_GRID) & on_grid(v[1], ON_GRID) & on_grid(v[2], ON_GRID);
+    let (t, fast) = exact_add3(pending, v.map(f64::from), v, ON_GRID);
     match sq {
         None if fast => {
-            *pending = [t0, t1, t2];
+            *pending = t;
             Ok(())
         }
         Some((sum_sq, pending_sq)) => {
             let w = v.map(|x| x as f64 * x as f64);
-            let (q0, f0) = exact_add(pending_sq[0], w[0]);
-            let (q1, f1) = exact_add(pending_sq[1], w[1]);
-            let (q2, f2) = exact_add(pending_sq[2], w[2]);
-            let fast_sq = f0
-                & f1
-                & f2
-                & on_grid(v[0], SQUARE_ON_GRID)
-                & on_grid(v[1], SQUARE_ON_GRID)
-                & on_grid(v[2], SQUARE_ON_GRID);
+            let (q, fast_sq) = exact_add3(pending_sq, w, v, SQUARE_ON_GRID);
             if fast & fast_sq {
-                *pending = [t0, t1, t2];
-                *pending_sq = [q0, q1, q2];
+                *pending = t;
+                *pending_sq = q;
                 return Ok(());
             }
             flush_pending(sum, pending, Some((&mut *sum_sq, &mut *pending_sq)), l)?;

@@ -17,15 +17,15 @@
 //! Where a texture may stand (as in Mitsuba 3.9): `diffuse`'s
 //! `reflectance`; `specular_reflectance` of `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor` and `plastic`;
-//! `specular_transmittance` of the dielectrics; `eta` and `k` of the
-//! conductors; `plastic`'s `diffuse_reflectance`; and `alpha` of
+//! `specular_transmittance` of the dielectrics; `plastic`'s
+//! `diffuse_reflectance`; and `alpha` of
 //! `roughconductor` and `roughdielectric` (the roughness is then the mean of
 //! a checkerboard colour's channels — of `color1` where the colour would be
 //! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
 //! parameter's range everywhere (reflectances in [0, 1]). fgf refuses, in
 //! one line naming the feature: a texture as an area emitter's `radiance`
-//! (Mitsuba allows it), `alpha_u`/`alpha_v` textures (anisotropic
+//! or as a conductor's `eta` or `k` (Mitsuba allows both), `alpha_u`/`alpha_v` textures (anisotropic
 //! roughness), textures nested in a `checkerboard`, and the texture plugins
 //! fgf lacks (`mesh_attribute`, `volume`, ...).
 //!
