@@ -33,18 +33,7 @@ pub enum Texture {
 /// A pixel index wrapped into `0..n` (`n > 0`).
 #[inline]
 fn wrap(i: i64, n: i64, mode: WrapMode) -> usize {
-    (match mode {
-        WrapMode::Repeat => i.rem_euclid(n),
-        WrapMode::Clamp => i.clamp(0, n - 1),
-        WrapMode::Mirror => {
-            let j = i.rem_euclid(2 * n);
-            if j >= n {
-                2 * n - 1 - j
-            } else {
-                j
-            }
-        }
-    }) as usize
+    mode.index(i, n)
 }
 
 impl Texture {

@@ -207,7 +207,7 @@ fn furnace_heterogeneous_returns_environment_radiance() {
         to_world: Mat4::from_translation(Vec3::splat(-1.0)) * Mat4::from_scale(Vec3::splat(2.0)),
         use_grid_bbox: false,
         filter: GridFilter::Trilinear,
-        wrap_clamp: true,
+        wrap: fgf_scene::WrapMode::Clamp,
     };
     s.media.push(MediumDesc::Heterogeneous {
         sigma_t: VolumeDesc::Grid(grid),
@@ -267,7 +267,7 @@ fn uncollided_slab_transmittance_grid() {
             * Mat4::from_scale(Vec3::new(20.0, 20.0, 0.5)),
         use_grid_bbox: false,
         filter: GridFilter::Nearest,
-        wrap_clamp: true,
+        wrap: fgf_scene::WrapMode::Clamp,
     };
     slab_transmittance(
         MediumDesc::Heterogeneous {

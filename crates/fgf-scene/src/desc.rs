@@ -306,12 +306,44 @@ pub enum BitmapFilter {
     Nearest,
 }
 
-/// What a bitmap lookup does outside `[0, 1)²`.
+/// What a bitmap or grid lookup does outside `[0, 1)²` / `[0, 1)³`
+/// (Mitsuba's `wrap_mode`, with Dr.Jit's texture semantics).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum WrapMode {
     Repeat,
     Mirror,
     Clamp,
+}
+
+impl WrapMode {
+    /// Texel index `i` (any integer) wrapped into `0..n` (`n > 0`):
+    /// `repeat` is periodic, `mirror` reflects about each edge (period
+    /// `2n`, the edge texel repeated), `clamp` holds the edge texel.
+    #[inline]
+    pub fn index(self, i: i64, n: i64) -> usize {
+        (match self {
+            WrapMode::Repeat => i.rem_euclid(n),
+            WrapMode::Clamp => i.clamp(0, n - 1),
+            WrapMode::Mirror => {
+                let j = i.rem_euclid(2 * n);
+                if j >= n {
+                    2 * n - 1 - j
+                } else {
+                    j
+                }
+            }
+        }) as usize
+    }
+
+    /// Mitsuba's `wrap_mode` string.
+    pub fn parse(s: &str) -> Option<WrapMode> {
+        match s {
+            "repeat" => Some(WrapMode::Repeat),
+            "mirror" => Some(WrapMode::Mirror),
+            "clamp" => Some(WrapMode::Clamp),
+            _ => None,
+        }
+    }
 }
 
 impl TextureDesc {
@@ -437,8 +469,9 @@ pub struct GridVolumeDesc {
     pub to_world: Mat4,
     pub use_grid_bbox: bool,
     pub filter: GridFilter,
-    /// Mitsuba's `wrap_mode`; only `clamp` (the default) is supported.
-    pub wrap_clamp: bool,
+    /// Mitsuba's `wrap_mode` (default `clamp`): what a lookup near or
+    /// beyond the grid's faces reads.
+    pub wrap: WrapMode,
 }
 
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -839,8 +839,5 @@ fn check_grid(g: &GridVolumeDesc, name: &str, r: Range<f64>) -> Check {
             format!("use_grid_bbox is true but the '{name}' grid's bounding box {b:?} is empty"),
         );
     }
-    if !g.wrap_clamp {
-        return fail(Some("wrap_mode"), "only wrap_mode 'clamp' is supported");
-    }
     Ok(())
 }

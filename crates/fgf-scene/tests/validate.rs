@@ -203,7 +203,7 @@ fn transforms_meshes_and_grids_must_be_usable() {
             to_world: glam::Mat4::IDENTITY,
             use_grid_bbox: false,
             filter: GridFilter::Trilinear,
-            wrap_clamp: true,
+            wrap: fgf_scene::WrapMode::Clamp,
         })
     };
     let mut s = minimal_scene();

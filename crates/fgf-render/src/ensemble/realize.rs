@@ -157,7 +157,7 @@ pub fn render_realization(
                 to_world,
                 use_grid_bbox: false,
                 filter: GridFilter::Nearest,
-                wrap_clamp: true,
+                wrap: fgf_scene::WrapMode::Clamp,
             }),
             albedo: VolumeDesc::Constant(*albedo),
             scale: 1.0,

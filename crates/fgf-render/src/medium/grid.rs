@@ -5,8 +5,10 @@
 //!   bounding box with `use_grid_bbox`), mapped to the world by the volume's
 //!   `to_world`. Like Mitsuba, the medium is empty outside that box.
 //! * Lookups follow Mitsuba 3 (checked against 3.9.1): voxel `i` is centred
-//!   at `(i + 0.5)/res`; `trilinear` interpolates between centres and clamps
-//!   at the border; `nearest` takes the voxel containing the point.
+//!   at `(i + 0.5)/res`; `trilinear` interpolates between centres;
+//!   `nearest` takes the voxel containing the point; indices beyond the
+//!   grid are wrapped by `wrap_mode` (`clamp` holds the edge voxel,
+//!   `repeat` reads the opposite face's, `mirror` reflects).
 //! * Free flights use delta tracking and shadow rays ratio tracking against a
 //!   piecewise-constant majorant: a coarse grid of (at most) 16³ super-voxels,
 //!   each holding the maximum of every voxel value a lookup inside it can
@@ -35,7 +37,7 @@ use crate::math::Sampler;
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{mean, Spectrum};
-use fgf_scene::{GridFilter, GridVolumeDesc, VolumeDesc};
+use fgf_scene::{GridFilter, GridVolumeDesc, VolumeDesc, WrapMode};
 use glam::{Affine3A, Vec3};
 use std::ops::ControlFlow;
 
@@ -46,6 +48,7 @@ pub struct GridTex {
     channels: usize,
     data: Vec<f32>,
     filter: GridFilter,
+    wrap: WrapMode,
     /// World to unit-cube coordinates.
     to_unit: Affine3A,
 }
@@ -71,6 +74,7 @@ impl GridTex {
             channels: g.channels,
             data: g.data.clone(),
             filter: d.filter,
+            wrap: d.wrap,
             to_unit,
         })
     }
@@ -121,19 +125,22 @@ impl GridTex {
         }
     }
 
+    /// Voxel index `i` along axis `k` wrapped into the grid.
+    #[inline]
+    fn wrap(&self, i: i64, k: usize) -> usize {
+        self.wrap.index(i, self.res[k] as i64)
+    }
+
     /// Index of the voxel holding unit-cube point `u` (`nearest` filter),
-    /// clamped to the grid.
+    /// wrapped into the grid.
     #[inline]
     fn nearest(&self, u: Vec3) -> [usize; 3] {
-        std::array::from_fn(|k| {
-            ((u[k] * self.res[k] as f32).floor().max(0.0) as usize).min(self.res[k] - 1)
-        })
+        std::array::from_fn(|k| self.wrap((u[k] * self.res[k] as f32).floor() as i64, k))
     }
 
     /// The two voxel indices per axis around unit-cube point `u` and the
     /// interpolation weight of the upper one (`trilinear` filter). Voxel
-    /// centres sit at (i + 0.5)/res; outside them the edge value is held
-    /// (clamp-to-edge).
+    /// centres sit at (i + 0.5)/res; indices beyond the grid are wrapped.
     #[inline]
     fn trilinear_corners(&self, u: Vec3) -> ([usize; 3], [usize; 3], [f32; 3]) {
         let mut i0 = [0usize; 3];
@@ -143,9 +150,8 @@ impl GridTex {
             let x = u[k] * self.res[k] as f32 - 0.5;
             let fl = x.floor();
             let i = fl as i64;
-            let hi = self.res[k] as i64 - 1;
-            i0[k] = i.clamp(0, hi) as usize;
-            i1[k] = (i + 1).clamp(0, hi) as usize;
+            i0[k] = self.wrap(i, k);
+            i1[k] = self.wrap(i + 1, k);
             f[k] = x - fl;
         }
         (i0, i1, f)
@@ -241,27 +247,30 @@ impl GridMedium {
         };
         let maj_res = [0, 1, 2].map(|k| MAJORANT_RES.min(tex.res[k]));
         let mut maj = vec![0f32; maj_res[0] * maj_res[1] * maj_res[2]];
-        // Voxel index range that a lookup inside super-voxel `c` along axis k
+        // Voxel indices that a lookup inside super-voxel `c` along axis k
         // can touch: trilinear reads floor(u·res - 0.5) and the next voxel,
-        // for u in [c/R, (c+1)/R]; this range also covers `nearest`.
-        let range = |k: usize, c: usize| {
+        // for u in [c/R, (c+1)/R], wrapped as the lookup wraps them; this
+        // range also covers `nearest`.
+        let reach = |k: usize, c: usize| -> Vec<usize> {
             let r = tex.res[k] as f64;
             let rr = maj_res[k] as f64;
             let lo = ((c as f64 / rr) * r - 0.5).floor() as i64;
             let hi = (((c + 1) as f64 / rr) * r - 0.5).floor() as i64 + 1;
-            let n = tex.res[k] as i64 - 1;
-            (lo.clamp(0, n) as usize, hi.clamp(0, n) as usize)
+            let mut v: Vec<usize> = (lo..=hi).map(|i| tex.wrap(i, k)).collect();
+            v.sort_unstable();
+            v.dedup();
+            v
         };
         for cz in 0..maj_res[2] {
-            let (z0, z1) = range(2, cz);
+            let zs = reach(2, cz);
             for cy in 0..maj_res[1] {
-                let (y0, y1) = range(1, cy);
+                let ys = reach(1, cy);
                 for cx in 0..maj_res[0] {
-                    let (x0, x1) = range(0, cx);
+                    let xs = reach(0, cx);
                     let mut m = 0f32;
-                    for z in z0..=z1 {
-                        for y in y0..=y1 {
-                            for x in x0..=x1 {
+                    for &z in &zs {
+                        for &y in &ys {
+                            for &x in &xs {
                                 m = m.max(crate::spectrum::max_comp(tex.voxel(x, y, z)));
                             }
                         }
@@ -416,6 +425,15 @@ mod tests {
     use std::sync::Arc;
 
     fn grid(res: [usize; 3], data: Vec<f32>) -> GridVolumeDesc {
+        grid_with(res, data, GridFilter::Trilinear, WrapMode::Clamp)
+    }
+
+    fn grid_with(
+        res: [usize; 3],
+        data: Vec<f32>,
+        filter: GridFilter,
+        wrap: WrapMode,
+    ) -> GridVolumeDesc {
         GridVolumeDesc {
             grid: Arc::new(VolGrid {
                 shape: res,
@@ -425,8 +443,61 @@ mod tests {
             }),
             to_world: glam::Mat4::IDENTITY,
             use_grid_bbox: false,
-            filter: GridFilter::Trilinear,
-            wrap_clamp: true,
+            filter,
+            wrap,
+        }
+    }
+
+    /// `eval_1` of Mitsuba 3.9.1's `gridvolume` on a 4×1×1 grid (1, 2, 3,
+    /// 10) at x = -0.3, 0, 0.05, 0.1, 0.5, 0.95, 1, 1.1, 1.4, for every
+    /// `wrap_mode` and filter.
+    #[test]
+    fn wrap_modes_match_mitsuba() {
+        use GridFilter::*;
+        use WrapMode::*;
+        let xs = [-0.3f32, 0.0, 0.05, 0.1, 0.5, 0.95, 1.0, 1.1, 1.4];
+        let cases = [
+            (
+                Clamp,
+                Trilinear,
+                [1.0f32, 1.0, 1.0, 1.0, 2.5, 10.0, 10.0, 10.0, 10.0],
+            ),
+            (
+                Clamp,
+                Nearest,
+                [1.0, 1.0, 1.0, 1.0, 3.0, 10.0, 10.0, 10.0, 10.0],
+            ),
+            (
+                Repeat,
+                Trilinear,
+                [5.1, 5.5, 3.7, 1.9, 2.5, 7.3, 5.5, 1.9, 2.1],
+            ),
+            (
+                Repeat,
+                Nearest,
+                [3.0, 1.0, 1.0, 1.0, 3.0, 10.0, 1.0, 1.0, 2.0],
+            ),
+            (
+                Mirror,
+                Trilinear,
+                [1.7, 1.0, 1.0, 1.0, 2.5, 10.0, 10.0, 10.0, 2.9],
+            ),
+            (
+                Mirror,
+                Nearest,
+                [2.0, 1.0, 1.0, 1.0, 3.0, 10.0, 10.0, 10.0, 3.0],
+            ),
+        ];
+        for (wrap, filter, want) in cases {
+            let d = grid_with([4, 1, 1], vec![1.0, 2.0, 3.0, 10.0], filter, wrap);
+            let t = GridTex::new(&d, "t").unwrap();
+            for (x, v) in xs.iter().zip(want) {
+                let got = t.eval_unit(Vec3::new(*x, 0.5, 0.5)).x;
+                assert!(
+                    (got - v).abs() < 1e-4,
+                    "{wrap:?} {filter:?} {x}: {got} vs {v}"
+                );
+            }
         }
     }
 
@@ -447,7 +518,9 @@ mod tests {
         }
     }
 
-    /// Every trilinear lookup is bounded by its super-voxel's majorant.
+    /// Every lookup inside the box is bounded by its super-voxel's
+    /// majorant, for every filter and wrap mode (`repeat` reads the
+    /// opposite face's voxels near a face).
     #[test]
     fn majorant_bounds_lookups() {
         let res = [37, 20, 9];
@@ -455,20 +528,31 @@ mod tests {
         let data: Vec<f32> = (0..res.iter().product::<usize>())
             .map(|_| s.next_1d().powi(4) * 10.0)
             .collect();
-        let m = GridMedium::new(
-            &grid(res, data),
-            &VolumeDesc::Constant([1.0; 3]),
-            2.0,
-            Phase::Isotropic,
-            0,
-        )
-        .unwrap();
-        for _ in 0..20_000 {
-            let u = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
-            let c =
-                [0, 1, 2].map(|k| ((u[k] * m.maj_res[k] as f32) as usize).min(m.maj_res[k] - 1));
-            let mu = m.maj[(c[2] * m.maj_res[1] + c[1]) * m.maj_res[0] + c[0]];
-            assert!(m.sigma_t_unit(u).x <= mu, "{u:?}");
+        for wrap in [WrapMode::Clamp, WrapMode::Repeat, WrapMode::Mirror] {
+            for filter in [GridFilter::Trilinear, GridFilter::Nearest] {
+                let m = GridMedium::new(
+                    &grid_with(res, data.clone(), filter, wrap),
+                    &VolumeDesc::Constant([1.0; 3]),
+                    2.0,
+                    Phase::Isotropic,
+                    0,
+                )
+                .unwrap();
+                for _ in 0..20_000 {
+                    // Points near the faces are where the wrap modes differ.
+                    let u = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()).map(|x| {
+                        if x < 0.5 {
+                            x * x * 2.0
+                        } else {
+                            1.0 - (1.0 - x).powi(2) * 2.0
+                        }
+                    });
+                    let c = [0, 1, 2]
+                        .map(|k| ((u[k] * m.maj_res[k] as f32) as usize).min(m.maj_res[k] - 1));
+                    let mu = m.maj[(c[2] * m.maj_res[1] + c[1]) * m.maj_res[0] + c[0]];
+                    assert!(m.sigma_t_unit(u).x <= mu, "{wrap:?} {filter:?} {u:?}");
+                }
+            }
         }
     }
 }

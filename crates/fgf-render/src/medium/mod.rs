@@ -64,7 +64,7 @@ fn constant_unit_cube(c: fgf_scene::Rgb) -> GridVolumeDesc {
         to_world: glam::Mat4::IDENTITY,
         use_grid_bbox: false,
         filter: fgf_scene::GridFilter::Nearest,
-        wrap_clamp: true,
+        wrap: fgf_scene::WrapMode::Clamp,
     }
 }
 

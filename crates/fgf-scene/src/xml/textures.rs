@@ -197,14 +197,12 @@ fn texture_desc<'a>(ctx: &Ctx<'a>, n: &'a XNode) -> Result<TextureDesc, SceneErr
                 "nearest" => BitmapFilter::Nearest,
                 _ => BitmapFilter::Bilinear,
             };
-            let wrap = match p
-                .choice("wrap_mode", "repeat", &["repeat", "mirror", "clamp"])?
-                .as_str()
-            {
-                "mirror" => WrapMode::Mirror,
-                "clamp" => WrapMode::Clamp,
-                _ => WrapMode::Repeat,
-            };
+            let wrap = WrapMode::parse(&p.choice(
+                "wrap_mode",
+                "repeat",
+                &["repeat", "mirror", "clamp"],
+            )?)
+            .unwrap_or(WrapMode::Repeat);
             let to_uv = to_uv(&p)?;
             let image = read_bitmap(fnode, file, raw)?;
             p.finish()?;

@@ -12,7 +12,7 @@
 //! | `gridvolume` | `to_world` | transform | – | invertible | identity | volume space to world |
 //! | `gridvolume` | `use_grid_bbox` | boolean | – | – | false | false: the grid spans the unit cube `[0, 1]³` of volume space; true: the bounding box in the file (which must not be empty) |
 //! | `gridvolume` | `filter_type` | string | – | `trilinear`, `nearest` | `trilinear` | interpolation between voxel centres |
-//! | `gridvolume` | `wrap_mode` | string | – | `clamp`; `mirror` for `sigma_t` and `density` | `clamp` | lookups outside `[0, 1]³`; inside the box (all a `sigma_t` or `density` grid is looked up at) `mirror` gives the same values as `clamp`; `repeat` is not supported |
+//! | `gridvolume` | `wrap_mode` | string | – | `clamp`, `repeat`, `mirror` | `clamp` | what a lookup reads beyond the outermost voxel centres (Dr.Jit's texture semantics, as Mitsuba 3.9.1): `repeat` interpolates across to the opposite face even inside the box, `mirror` reflects (inside the box it reads what `clamp` reads) |
 //! | `constvolume` | `value` | float or rgb | that of the parameter | that of the parameter | 1 | |
 //! | `constvolume` | `to_world` | transform | – | invertible | identity | places the volume's unit cube `[0, 1]³`: the bounding box of a `heterogeneous` medium with a constant `sigma_t` (see [`super::media`]); it has no effect elsewhere |
 //!
@@ -115,7 +115,7 @@ pub(crate) fn constant_grid(c: Rgb, to_world: Mat4) -> GridVolumeDesc {
         to_world,
         use_grid_bbox: false,
         filter: GridFilter::Nearest,
-        wrap_clamp: true,
+        wrap: crate::WrapMode::Clamp,
     }
 }
 
@@ -267,29 +267,16 @@ pub(crate) fn gridvolume(
             ));
         }
     }
-    if let Some((w, node)) = p.string("wrap_mode")? {
-        // Only lookups outside [0, 1]^3 tell mirror from clamp, and a
-        // sigma_t or density grid is looked up inside its box only.
-        let inside_only = matches!(name, "sigma_t" | "density");
-        let ok = w == "clamp" || (w == "mirror" && inside_only);
-        if !ok {
-            let valid = if inside_only {
-                "clamp, mirror"
-            } else {
-                "clamp"
-            };
-            return Err(node.err(format!(
-                "wrap_mode '{w}' is not supported for '{name}' (valid: {valid})"
-            )));
-        }
-    }
+    let wrap =
+        crate::WrapMode::parse(&p.choice("wrap_mode", "clamp", &["clamp", "repeat", "mirror"])?)
+            .unwrap_or(crate::WrapMode::Clamp);
     p.finish()?;
     Ok(GridVolumeDesc {
         grid: Arc::new(grid),
         to_world,
         use_grid_bbox,
         filter,
-        wrap_clamp: true,
+        wrap,
     })
 }
 
