@@ -277,6 +277,11 @@ pub enum TexturedParam {
     /// checkerboard colour's channels, with the colours' roles swapped as
     /// Mitsuba 3.9.1 swaps them; the luminance of a bitmap's value).
     Alpha,
+    /// A rough BSDF's `alpha_u` (roughness along the shading frame's
+    /// tangent `s`), evaluated as `Alpha`.
+    AlphaU,
+    /// A rough BSDF's `alpha_v` (along the bitangent `t`).
+    AlphaV,
 }
 
 /// A 2D texture, looked up at a surface point's texture coordinates after

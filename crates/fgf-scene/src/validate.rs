@@ -594,6 +594,12 @@ pub(crate) fn textured_param_name(base: &BsdfDesc, p: TexturedParam) -> Option<&
             P::SpecularTransmittance,
         ) => "specular_transmittance",
         (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::Alpha) => "alpha",
+        (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::AlphaU) => {
+            "alpha_u"
+        }
+        (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::AlphaV) => {
+            "alpha_v"
+        }
         _ => return None,
     })
 }
@@ -628,7 +634,7 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
     }
     let (lo, hi) = t.range();
     let r = match param {
-        TexturedParam::Alpha => ALPHA,
+        TexturedParam::Alpha | TexturedParam::AlphaU | TexturedParam::AlphaV => ALPHA,
         _ => UNIT,
     };
     for v in [lo, hi] {

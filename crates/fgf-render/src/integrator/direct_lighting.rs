@@ -20,7 +20,7 @@
 
 use super::direct::{Scatterer, SurfaceVertex};
 use crate::emitter::Emitter;
-use crate::math::{mis_power, Frame, Sampler};
+use crate::math::{mis_power, Sampler};
 use crate::ray::{offset_point, Ray};
 use crate::spectrum::Spectrum;
 use crate::world::World;
@@ -74,7 +74,7 @@ impl World {
         let bsdf = &*bsdf;
         let total = (n_e + n_b) as f32;
         let (c_e, c_b) = (n_e as f32 / total, n_b as f32 / total);
-        let frame = Frame::from_normal(h.ns);
+        let frame = self.frame_at(bsdf, &h);
         let wi_local = frame.to_local(-ray.d);
         if bsdf.is_smooth() && !self.emitters.is_empty() {
             let vertex = SurfaceVertex {

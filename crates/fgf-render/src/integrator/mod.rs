@@ -58,6 +58,20 @@ impl World {
         }
     }
 
+    /// The local frame of `bsdf` at hit `h`: Mitsuba's shading frame,
+    /// oriented by the surface tangent ([`crate::geometry::Geometry::shading_frame`]),
+    /// for an anisotropic BSDF; for the others, whose values do not change
+    /// under a rotation about the normal, the cheaper
+    /// [`Frame::from_normal`].
+    #[inline(always)]
+    pub(crate) fn frame_at(&self, bsdf: &Bsdf, h: &Hit) -> Frame {
+        if bsdf.is_anisotropic() {
+            self.geom.shading_frame(h)
+        } else {
+            Frame::from_normal(h.ns)
+        }
+    }
+
     /// Radiance arriving at the camera along `ray` (one sample).
     pub fn li(&self, mut ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
         if let Some((n_e, n_b)) = self.direct_samples {
@@ -223,7 +237,7 @@ impl World {
             if depth + 1 >= self.max_depth && !thin_crossings {
                 break;
             }
-            let frame = Frame::from_normal(h.ns);
+            let frame = self.frame_at(bsdf, &h);
             let wi_local = frame.to_local(-ray.d);
             if bsdf.is_smooth() {
                 // Next-event estimation from the surface.

@@ -7,10 +7,12 @@
 //! rough coating) and `twosided` (the nested BSDF on both sides). The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
 //! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
-//! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
+//! a rough plugin's `alpha` (`alpha_u`, `alpha_v`), may be a `checkerboard` or `bitmap` texture
 //! where Mitsuba 3 allows one (which parameters, and how: [`super::textures`]).
-//! Anisotropic roughness, `mask` and `principled` are refused with a
-//! message naming them. A `<bsdf>` at the top level
+//! Anisotropic roughness follows Mitsuba's shading frame: `alpha_u` along
+//! the surface tangent `∂p/∂u` (each shape's parameterisation, see
+//! `fgf_render::geometry::frame`), `alpha_v` across it.
+//! `mask` and `principled` are refused with a message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -26,7 +28,8 @@
 //! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
 //! | `roughconductor` | `material`, `eta`, `k`, `specular_reflectance` | as `conductor` | | | as `conductor` | |
 //! | rough plugins | `distribution` | string | – | `"beckmann"`, `"ggx"` | `"beckmann"` | microfacet normal distribution |
-//! | rough plugins | `alpha` | float, or texture (`roughconductor`, `roughdielectric`) | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
+//! | rough plugins | `alpha` | float, or texture (`roughconductor`, `roughdielectric`) | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope) |
+//! | `roughconductor`, `roughdielectric` | `alpha_u`, `alpha_v` | float or texture | – | 1e-4 ≤ alpha ≤ 4 | – | instead of `alpha` (both or neither): anisotropic roughness along the surface tangent `∂p/∂u` and across it |
 //! | rough plugins | `sample_visible` | boolean | – | – | true | sample only the normals visible from the incident direction |
 //! | `plastic`, `roughplastic` | `int_ior`, `ext_ior` | float or string | – | as `dielectric`, not equal | `"polypropylene"` (1.49), `"air"` | the coating's indices |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | the base |
@@ -47,6 +50,13 @@
 //!         <string name="distribution" value="ggx"/>
 //!         <float name="alpha" value="0.2"/>
 //!         <string name="material" value="Cu"/>
+//!     </bsdf>
+//! </shape>
+//! <shape type="sphere">
+//!     <bsdf type="roughconductor">
+//!         <string name="material" value="Al"/>
+//!         <float name="alpha_u" value="0.05"/>
+//!         <float name="alpha_v" value="0.3"/>
 //!     </bsdf>
 //! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
@@ -100,9 +110,8 @@ const BSDFS: &[&str] = &[
 
 /// `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`, with
 /// Mitsuba's defaults (Beckmann, 0.1, true). `isotropic` refuses
-/// `alpha_u`/`alpha_v` (roughplastic). Anisotropic roughness is refused:
-/// its orientation follows the surface tangent `dp/du`, which the renderer
-/// does not carry.
+/// `alpha_u`/`alpha_v` (roughplastic). `alpha_u` is the roughness along the
+/// shading frame's tangent (`∂p/∂u`), `alpha_v` across it.
 fn microfacet_desc<'a>(
     ctx: &mut Ctx<'a>,
     p: &Props<'a>,
@@ -116,27 +125,33 @@ fn microfacet_desc<'a>(
         "ggx" => MicrofacetKind::Ggx,
         _ => MicrofacetKind::Beckmann,
     };
-    for name in ["alpha_u", "alpha_v"] {
-        if let Some(e) = p.peek(name).filter(|e| e.target.tag == "texture") {
-            return Err(e.node.err(format!(
-                "a texture as '{name}' (anisotropic roughness) is not supported; give one 'alpha'"
-            )));
-        }
-    }
-    // A texture alpha: the description keeps its mean (see `textures`).
-    let alpha = match p.peek("alpha").filter(|e| e.target.tag == "texture") {
-        Some(e) => match textures::color_or_texture(ctx, p, "alpha", [0.1; 3], ALPHA)? {
-            ColorOrTexture::Texture(t) => {
-                let mean = (t.mean() as f64).clamp(1e-4, 4.0);
-                textures.push((TexturedParam::Alpha, t));
-                Some((mean, e.node))
+    // A texture roughness: the description keeps its mean (see `textures`).
+    let mut alpha_of =
+        |name: &str, param: TexturedParam| -> Result<Option<(f64, &'a XNode)>, SceneError> {
+            match p.peek(name).filter(|e| e.target.tag == "texture") {
+                Some(e) => {
+                    if isotropic && name != "alpha" {
+                        return Err(e.node.err(format!(
+                            "this BSDF takes an isotropic 'alpha' only (no {name})"
+                        )));
+                    }
+                    Ok(
+                        match textures::color_or_texture(ctx, p, name, [0.1; 3], ALPHA)? {
+                            ColorOrTexture::Texture(t) => {
+                                let mean = (t.mean() as f64).clamp(1e-4, 4.0);
+                                textures.push((param, t));
+                                Some((mean, e.node))
+                            }
+                            ColorOrTexture::Color(c) => Some((c[0], e.node)),
+                        },
+                    )
+                }
+                None => p.float(name),
             }
-            ColorOrTexture::Color(c) => Some((c[0], e.node)),
-        },
-        None => p.float("alpha")?,
-    };
-    let au = p.float("alpha_u")?;
-    let av = p.float("alpha_v")?;
+        };
+    let alpha = alpha_of("alpha", TexturedParam::Alpha)?;
+    let au = alpha_of("alpha_u", TexturedParam::AlphaU)?;
+    let av = alpha_of("alpha_v", TexturedParam::AlphaV)?;
     let chk = |v: Option<(f64, &XNode)>, name: &str| -> Result<Option<f64>, SceneError> {
         v.map(|(v, node)| check(node, name, v, ALPHA)).transpose()
     };
@@ -161,11 +176,6 @@ fn microfacet_desc<'a>(
         }
         _ => return Err(p.node.err("give both 'alpha_u' and 'alpha_v'")),
     };
-    if alpha_u != alpha_v {
-        return Err(p.node.err(format!(
-            "anisotropic roughness (alpha_u = {alpha_u} != alpha_v = {alpha_v}) is not supported: it needs surface tangents; give one 'alpha'"
-        )));
-    }
     Ok(MicrofacetDesc {
         kind,
         alpha_u: alpha_u as f32,
