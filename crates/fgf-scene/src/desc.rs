@@ -282,6 +282,10 @@ pub enum TexturedParam {
     AlphaU,
     /// A rough BSDF's `alpha_v` (along the bitangent `t`).
     AlphaV,
+    /// A conductor's `eta` (real part of the index of refraction).
+    Eta,
+    /// A conductor's `k` (imaginary part).
+    K,
 }
 
 /// A 2D texture, looked up at a surface point's texture coordinates after

@@ -600,6 +600,8 @@ pub(crate) fn textured_param_name(base: &BsdfDesc, p: TexturedParam) -> Option<&
         (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::AlphaV) => {
             "alpha_v"
         }
+        (BsdfDesc::Conductor { .. } | BsdfDesc::RoughConductor { .. }, P::Eta) => "eta",
+        (BsdfDesc::Conductor { .. } | BsdfDesc::RoughConductor { .. }, P::K) => "k",
         _ => return None,
     })
 }
@@ -635,6 +637,7 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
     let (lo, hi) = t.range();
     let r = match param {
         TexturedParam::Alpha | TexturedParam::AlphaU | TexturedParam::AlphaV => ALPHA,
+        TexturedParam::Eta | TexturedParam::K => NON_NEGATIVE,
         _ => UNIT,
     };
     for v in [lo, hi] {

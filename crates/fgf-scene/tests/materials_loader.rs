@@ -94,6 +94,29 @@ fn anisotropic_roughness() {
     }
 }
 
+/// A conductor's `eta`/`k` from textures: not a perfect mirror, and not
+/// together with `material`.
+#[test]
+fn textured_conductor_eta_k() {
+    match bsdf(
+        r#"<bsdf type="conductor"><texture type="checkerboard" name="k"><float name="color0" value="0.5"/><float name="color1" value="1"/></texture></bsdf>"#,
+    ) {
+        BsdfDesc::Textured { base, textures } => {
+            assert!(matches!(
+                *base,
+                BsdfDesc::Conductor {
+                    perfect_mirror: false,
+                    ..
+                }
+            ));
+            assert_eq!(textures[0].0, TexturedParam::K);
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/><texture type="checkerboard" name="eta"/></bsdf></shape>"#).unwrap_err();
+    assert!(e.contains("not both"), "{e}");
+}
+
 #[test]
 fn refusals_name_the_parameter() {
     let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf></shape>"#).unwrap_err();

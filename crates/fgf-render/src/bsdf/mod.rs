@@ -284,6 +284,10 @@ impl Bsdf {
                     let a = tex.eval_1(uv);
                     (c.distr.ax, c.distr.ay) = (a, a);
                 }
+                (P::Eta, BsdfKind::Conductor { eta, .. }) => *eta = tex.eval(uv),
+                (P::Eta, BsdfKind::RoughConductor(c)) => c.eta = tex.eval(uv),
+                (P::K, BsdfKind::Conductor { k, .. }) => *k = tex.eval(uv),
+                (P::K, BsdfKind::RoughConductor(c)) => c.k = tex.eval(uv),
                 (P::AlphaU, BsdfKind::RoughConductor(c)) => c.distr.ax = tex.eval_1(uv),
                 (P::AlphaU, BsdfKind::RoughDielectric(c)) => c.distr.ax = tex.eval_1(uv),
                 (P::AlphaV, BsdfKind::RoughConductor(c)) => c.distr.ay = tex.eval_1(uv),

@@ -22,7 +22,7 @@
 //! | `dielectric` | `int_ior`, `ext_ior` | float or string | – | a number > 0 or a name of Mitsuba's table (`"water"`, `"bk7"`, `"diamond"`, ...) | `"bk7"` (1.5046), `"air"` (1.000277) | index of refraction inside and outside |
 //! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float, rgb or texture | – | in [0, 1] | 1, 1 | |
 //! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
-//! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
+//! | `conductor` | `eta`, `k` | float, rgb or texture | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
 //! | `conductor` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | |
 //! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | reflectance `2R/(1+R)` of the two faces; the rest is transmitted undeviated |
 //! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
@@ -199,14 +199,23 @@ fn iors(p: &Props, int_default: f64) -> Result<(f32, f32), SceneError> {
 }
 
 /// A conductor's `material` or `eta`/`k` (Mitsuba's defaults: a perfect
-/// mirror), as `(eta, k)`.
-fn conductor_eta_k(p: &Props) -> Result<([f64; 3], [f64; 3]), SceneError> {
+/// mirror), as `(eta, k)`. A textured `eta` or `k` is pushed to `tex`; the
+/// description keeps its mean.
+fn conductor_eta_k<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    tex: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<([f64; 3], [f64; 3]), SceneError> {
     let material = p.string("material")?;
-    let eta = p.color("eta")?;
-    let k = p.color("k")?;
+    let textured = |name: &str| p.peek(name).filter(|e| e.target.tag == "texture").is_some();
+    let (eta_tex, k_tex) = (textured("eta"), textured("k"));
+    let (eta, k) = (
+        if eta_tex { None } else { p.color("eta")? },
+        if k_tex { None } else { p.color("k")? },
+    );
     Ok(match material {
         Some((m, mnode)) if m != "none" => {
-            if eta.is_some() || k.is_some() {
+            if eta.is_some() || k.is_some() || eta_tex || k_tex {
                 return Err(mnode.err("give either 'material' or 'eta'/'k', not both"));
             }
             let (_, e, k) = tables::CONDUCTORS
@@ -225,12 +234,34 @@ fn conductor_eta_k(p: &Props) -> Result<([f64; 3], [f64; 3]), SceneError> {
             (*e, *k)
         }
         _ => {
-            let nonneg = |v: Option<([f64; 3], &XNode)>, name: &str, def: f64| match v {
-                None => Ok([def; 3]),
-                Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
+            let mut value = |v: Option<([f64; 3], &XNode)>,
+                             is_tex: bool,
+                             name: &str,
+                             param: TexturedParam,
+                             def: f64|
+             -> Result<[f64; 3], SceneError> {
+                if is_tex {
+                    return Ok(
+                        match textures::color_or_texture(ctx, p, name, [def; 3], NON_NEGATIVE)? {
+                            ColorOrTexture::Texture(t) => {
+                                let m = t.mean() as f64;
+                                tex.push((param, t));
+                                [m; 3]
+                            }
+                            ColorOrTexture::Color(c) => c,
+                        },
+                    );
+                }
+                match v {
+                    None => Ok([def; 3]),
+                    Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
+                }
             };
             // Mitsuba's defaults eta = 0, k = 1: a perfect mirror.
-            (nonneg(eta, "eta", 0.0)?, nonneg(k, "k", 1.0)?)
+            (
+                value(eta, eta_tex, "eta", TexturedParam::Eta, 0.0)?,
+                value(k, k_tex, "k", TexturedParam::K, 1.0)?,
+            )
         }
     })
 }
@@ -415,7 +446,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             }
         }
         "conductor" | "roughconductor" => {
-            let (eta, k) = conductor_eta_k(&p)?;
+            let (eta, k) = conductor_eta_k(ctx, &p, &mut tex)?;
             let specular_reflectance = col(
                 ctx,
                 "specular_reflectance",
@@ -423,7 +454,9 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                 1.0,
                 &mut tex,
             )?;
-            let perfect_mirror = eta == [0.0; 3] && k == [1.0; 3];
+            let perfect_mirror = eta == [0.0; 3]
+                && k == [1.0; 3]
+                && !tex.iter().any(|(p, _)| matches!(p, T::Eta | T::K));
             if ty == "conductor" {
                 BsdfDesc::Conductor {
                     eta: rgb(eta),

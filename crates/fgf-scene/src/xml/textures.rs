@@ -18,14 +18,17 @@
 //! `reflectance`; `specular_reflectance` of `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor` and `plastic`;
 //! `specular_transmittance` of the dielectrics; `plastic`'s
-//! `diffuse_reflectance`; and `alpha`, `alpha_u`, `alpha_v` of
+//! `diffuse_reflectance`; `eta` and `k` of `conductor` and
+//! `roughconductor` (values ≥ 0; the Fresnel term per channel of the
+//! texture's value at the hit; Mitsuba 3.9.1 itself refuses checkerboard
+//! colours above 1 there, as it reads them as reflectances); and `alpha`, `alpha_u`, `alpha_v` of
 //! `roughconductor` and `roughdielectric` (the roughness is then the mean of
 //! a checkerboard colour's channels — of `color1` where the colour would be
 //! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
 //! parameter's range everywhere (reflectances in [0, 1]). fgf refuses, in
 //! one line naming the feature: a texture as an area emitter's `radiance`
-//! or as a conductor's `eta` or `k` (Mitsuba allows both), textures nested in a `checkerboard`, and the texture plugins
+//! (Mitsuba allows it), textures nested in a `checkerboard`, and the texture plugins
 //! fgf lacks (`mesh_attribute`, `volume`, ...).
 //!
 //! `plastic` chooses between its lobes with the texture's mean, as Mitsuba:
