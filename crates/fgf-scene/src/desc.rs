@@ -386,8 +386,12 @@ pub struct MicrofacetDesc {
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum EmitterDesc {
-    /// On a shape; emits toward the side the normal points to.
-    Area { radiance: Rgb },
+    /// On a shape; emits toward the side the normal points to. `texture`:
+    /// a textured `radiance` (then `radiance` holds its mean).
+    Area {
+        radiance: Rgb,
+        texture: Option<TextureDesc>,
+    },
     /// `point`: `position` (or the translation of `to_world`), `intensity` in W/sr.
     Point { position: Vec3, intensity: Rgb },
     /// `spot`: `to_world` (looks down local +z), `intensity`, `cutoff_angle`

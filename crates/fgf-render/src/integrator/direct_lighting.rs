@@ -61,8 +61,9 @@ impl World {
                 }
                 // The front side is the shading normal's (see `Emitter::sample`).
                 if h.ns.dot(ray.d) < 0.0 {
-                    if let Emitter::Area { radiance, .. } = self.emitters[e as usize] {
-                        l += radiance;
+                    let em = &self.emitters[e as usize];
+                    if em.area_shape().is_some() {
+                        l += em.area_radiance(&self.geom, &h);
                     }
                 }
             }
@@ -133,9 +134,11 @@ impl World {
                     let Some(e) = self.shapes[h2.shape as usize].emitter else {
                         continue;
                     };
-                    let Emitter::Area { radiance, shape } = self.emitters[e as usize] else {
+                    let em = &self.emitters[e as usize];
+                    let Some(shape) = em.area_shape() else {
                         continue;
                     };
+                    let radiance = em.area_radiance(&self.geom, &h2);
                     let cos_l = -h2.ns.dot(wo);
                     if !(cos_l > 0.0) {
                         continue;

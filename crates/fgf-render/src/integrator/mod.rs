@@ -27,7 +27,6 @@ mod direct;
 mod direct_lighting;
 
 use crate::bsdf::Bsdf;
-use crate::emitter::Emitter;
 use crate::geometry::Hit;
 use crate::math::{mis_power, Frame, Sampler};
 use crate::medium::{DistanceEvent, SegmentStart};
@@ -189,7 +188,9 @@ impl World {
             // the shading normal, as in `Emitter::sample`).
             if let Some(e) = info.emitter {
                 if !(depth == 0 && self.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
-                    if let Emitter::Area { radiance, shape } = self.emitters[e as usize] {
+                    let em = &self.emitters[e as usize];
+                    if let Some(shape) = em.area_shape() {
+                        let radiance = em.area_radiance(&self.geom, &h);
                         let w = if specular {
                             1.0
                         } else {

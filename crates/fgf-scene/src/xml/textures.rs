@@ -26,10 +26,22 @@
 //! a checkerboard colour's channels — of `color1` where the colour would be
 //! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
-//! parameter's range everywhere (reflectances in [0, 1]). fgf refuses, in
-//! one line naming the feature: a texture as an area emitter's `radiance`
-//! (Mitsuba allows it), textures nested in a `checkerboard`, and the texture plugins
-//! fgf lacks (`mesh_attribute`, `volume`, ...).
+//! parameter's range everywhere (reflectances in [0, 1]).
+//!
+//! An `area` emitter's `radiance` may also be a texture (values ≥ 0), on a
+//! `rectangle`, `disk` or `sphere` ([`super::emitters`]): the emitted
+//! radiance is the texture at the emitting point's `(u, v)`, for hits and
+//! for light sampling. Mitsuba samples such an emitter through the texture
+//! (a checkerboard uniformly in `(u, v)`, a bitmap by its pixel values)
+//! mapped by the shape's `(u, v)` parameterisation; fgf samples by area:
+//! the same expectation on these three shapes, whose `(u, v)` cover them
+//! once. On a `cube` (six faces on one `(u, v)` square) or a mesh (covered
+//! as its texture coordinates are) Mitsuba's light sampling is not that
+//! estimator, so fgf refuses a textured emitter there.
+//!
+//! fgf refuses, in one line naming the feature: textures nested in a
+//! `checkerboard`, and the texture plugins fgf lacks (`mesh_attribute`,
+//! `volume`, ...).
 //!
 //! `plastic` chooses between its lobes with the texture's mean, as Mitsuba:
 //! the mean of a checkerboard's two colours, the mean luminance of a bitmap.
