@@ -435,8 +435,64 @@ fn bsdf_eval_pdf<'py>(
     ))
 }
 
+/// The shading frame `(s, t, n)` (an `(n, 9)` array, NaN for a miss) at
+/// the first hits of `n` rays `o + t d` (`(n, 3)` arrays) in a scene: the
+/// frame anisotropic BSDFs are evaluated in
+/// ([`fgf_render::geometry::Geometry::shading_frame`]), and the shape hit
+/// (-1 for a miss).
+#[pyfunction]
+#[pyo3(signature = (scene, origins, directions, defines=None))]
+fn shading_frame<'py>(
+    py: Python<'py>,
+    scene: PathBuf,
+    origins: PyReadonlyArray2<'py, f32>,
+    directions: PyReadonlyArray2<'py, f32>,
+    defines: Option<Vec<(String, String)>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let desc = load_scene(py, &scene, defines)?;
+    let world = fgf_render::world::World::build(&desc)
+        .map_err(|e| render_err(e, &scene.display().to_string()))?;
+    let (o, d) = (origins.as_array(), directions.as_array());
+    if o.ncols() != 3 || d.shape() != o.shape() {
+        return Err(ParameterError::new_err(format!(
+            "origins and directions must be (n, 3) arrays of the same shape, got {:?} and {:?}",
+            o.shape(),
+            d.shape()
+        )));
+    }
+    let n = o.nrows();
+    let (mut out, mut shapes) = (Vec::with_capacity(9 * n), Vec::with_capacity(n));
+    for k in 0..n {
+        let v = |a: &numpy::ndarray::ArrayView2<f32>| {
+            fgf_render::spectrum::Spectrum::new(a[[k, 0]], a[[k, 1]], a[[k, 2]])
+        };
+        let ray = fgf_render::ray::Ray {
+            o: v(&o),
+            d: v(&d).normalize(),
+        };
+        match world.geom.intersect(&ray, f32::INFINITY) {
+            Some(h) => {
+                let f = world.geom.shading_frame(&h);
+                for a in [f.s, f.t, f.n] {
+                    out.extend_from_slice(&[a.x, a.y, a.z]);
+                }
+                shapes.push(h.shape as i64);
+            }
+            None => {
+                out.extend_from_slice(&[f32::NAN; 9]);
+                shapes.push(-1);
+            }
+        }
+    }
+    Ok((
+        PyArray1::from_vec(py, out).reshape([n, 9])?.into_any(),
+        PyArray1::from_vec(py, shapes).into_any(),
+    ))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bsdf_eval_pdf, m)?)?;
+    m.add_function(wrap_pyfunction!(shading_frame, m)?)?;
     m.add_function(wrap_pyfunction!(render_scene, m)?)?;
     m.add_function(wrap_pyfunction!(write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_png, m)?)?;

@@ -461,7 +461,10 @@ fn disk_light_on_ground_matches_quadrature() {
             * Mat4::from_scale(Vec3::splat(radius)),
         flip_normals: false,
         bsdf: 2,
-        emitter: Some(EmitterDesc::Area { radiance: [le; 3] }),
+        emitter: Some(EmitterDesc::Area {
+            radiance: [le; 3],
+            texture: None,
+        }),
         interior: None,
         exterior: None,
     };

@@ -277,6 +277,15 @@ pub enum TexturedParam {
     /// checkerboard colour's channels, with the colours' roles swapped as
     /// Mitsuba 3.9.1 swaps them; the luminance of a bitmap's value).
     Alpha,
+    /// A rough BSDF's `alpha_u` (roughness along the shading frame's
+    /// tangent `s`), evaluated as `Alpha`.
+    AlphaU,
+    /// A rough BSDF's `alpha_v` (along the bitangent `t`).
+    AlphaV,
+    /// A conductor's `eta` (real part of the index of refraction).
+    Eta,
+    /// A conductor's `k` (imaginary part).
+    K,
 }
 
 /// A 2D texture, looked up at a surface point's texture coordinates after
@@ -409,8 +418,12 @@ pub struct MicrofacetDesc {
 
 #[derive(Debug, Clone, PartialEq)]
 pub enum EmitterDesc {
-    /// On a shape; emits toward the side the normal points to.
-    Area { radiance: Rgb },
+    /// On a shape; emits toward the side the normal points to. `texture`:
+    /// a textured `radiance` (then `radiance` holds its mean).
+    Area {
+        radiance: Rgb,
+        texture: Option<TextureDesc>,
+    },
     /// `point`: `position` (or the translation of `to_world`), `intensity` in W/sr.
     Point { position: Vec3, intensity: Rgb },
     /// `spot`: `to_world` (looks down local +z), `intensity`, `cutoff_angle`

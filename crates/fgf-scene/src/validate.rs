@@ -455,7 +455,13 @@ impl SceneDesc {
         medium_index("the exterior", s.exterior, self.media.len())?;
         match &s.emitter {
             None => Ok(()),
-            Some(EmitterDesc::Area { radiance }) => range_rgb("radiance", radiance, NON_NEGATIVE),
+            Some(EmitterDesc::Area { radiance, texture }) => {
+                range_rgb("radiance", radiance, NON_NEGATIVE)?;
+                match texture {
+                    None => Ok(()),
+                    Some(t) => check_emission_texture(t),
+                }
+            }
             Some(_) => fail(
                 None,
                 "a shape's emitter must be an area emitter (the others are not attached to shapes)",
@@ -594,6 +600,14 @@ pub(crate) fn textured_param_name(base: &BsdfDesc, p: TexturedParam) -> Option<&
             P::SpecularTransmittance,
         ) => "specular_transmittance",
         (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::Alpha) => "alpha",
+        (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::AlphaU) => {
+            "alpha_u"
+        }
+        (BsdfDesc::RoughConductor { .. } | BsdfDesc::RoughDielectric { .. }, P::AlphaV) => {
+            "alpha_v"
+        }
+        (BsdfDesc::Conductor { .. } | BsdfDesc::RoughConductor { .. }, P::Eta) => "eta",
+        (BsdfDesc::Conductor { .. } | BsdfDesc::RoughConductor { .. }, P::K) => "k",
         _ => return None,
     })
 }
@@ -628,7 +642,8 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
     }
     let (lo, hi) = t.range();
     let r = match param {
-        TexturedParam::Alpha => ALPHA,
+        TexturedParam::Alpha | TexturedParam::AlphaU | TexturedParam::AlphaV => ALPHA,
+        TexturedParam::Eta | TexturedParam::K => NON_NEGATIVE,
         _ => UNIT,
     };
     for v in [lo, hi] {
@@ -638,6 +653,45 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
                 format!(
                     "the texture for '{name}' has a value {v}, outside the parameter's range ({})",
                     r.text
+                ),
+            );
+        }
+    }
+    Ok(())
+}
+
+/// A textured area-emitter `radiance`: a finite `to_uv`, an image whose
+/// size matches its data, values ≥ 0.
+fn check_emission_texture(t: &TextureDesc) -> Check {
+    let to_uv = match t {
+        TextureDesc::Checkerboard { to_uv, .. } => to_uv,
+        TextureDesc::Bitmap { image, to_uv, .. } => {
+            if image.width == 0
+                || image.height == 0
+                || image.data.len() != 3 * image.width * image.height
+            {
+                return fail(
+                    Some("radiance"),
+                    "the texture's image is empty or its size does not match its data",
+                );
+            }
+            to_uv
+        }
+    };
+    if !to_uv.is_finite() {
+        return fail(
+            Some("radiance"),
+            "the texture's to_uv has non-finite entries",
+        );
+    }
+    let (lo, hi) = t.range();
+    for v in [lo, hi] {
+        if !(NON_NEGATIVE.ok)(v as f64) {
+            return fail(
+                Some("radiance"),
+                format!(
+                    "the texture for 'radiance' has a value {v}, outside the parameter's range ({})",
+                    NON_NEGATIVE.text
                 ),
             );
         }

@@ -1,7 +1,9 @@
 //! The loader's rough and coated BSDFs and the envmap: Mitsuba's defaults,
 //! and one-line refusals of what is not supported.
 
-use fgf_scene::{load_str, BsdfDesc, EmitterDesc, MicrofacetDesc, MicrofacetKind, SceneDesc};
+use fgf_scene::{
+    load_str, BsdfDesc, EmitterDesc, MicrofacetDesc, MicrofacetKind, SceneDesc, TexturedParam,
+};
 use std::path::Path;
 
 fn load(body: &str) -> Result<SceneDesc, String> {
@@ -68,10 +70,59 @@ fn rough_defaults_are_mitsubas() {
     ));
 }
 
+/// `alpha_u`/`alpha_v` (floats or textures): the roughness along the
+/// tangent and across it.
+#[test]
+fn anisotropic_roughness() {
+    match bsdf(
+        r#"<bsdf type="roughdielectric"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf>"#,
+    ) {
+        BsdfDesc::RoughDielectric { microfacet: m, .. } => {
+            assert_eq!((m.alpha_u, m.alpha_v), (0.1, 0.3));
+        }
+        other => panic!("{other:?}"),
+    }
+    match bsdf(
+        r#"<bsdf type="roughconductor"><float name="alpha_u" value="0.2"/><texture type="checkerboard" name="alpha_v"><float name="color0" value="0.1"/><float name="color1" value="0.3"/></texture></bsdf>"#,
+    ) {
+        BsdfDesc::Textured { base, textures } => {
+            assert!(matches!(*base, BsdfDesc::RoughConductor { .. }));
+            assert_eq!(textures.len(), 1);
+            assert_eq!(textures[0].0, TexturedParam::AlphaV);
+        }
+        other => panic!("{other:?}"),
+    }
+}
+
+/// A conductor's `eta`/`k` from textures: not a perfect mirror, and not
+/// together with `material`.
+#[test]
+fn textured_conductor_eta_k() {
+    match bsdf(
+        r#"<bsdf type="conductor"><texture type="checkerboard" name="k"><float name="color0" value="0.5"/><float name="color1" value="1"/></texture></bsdf>"#,
+    ) {
+        BsdfDesc::Textured { base, textures } => {
+            assert!(matches!(
+                *base,
+                BsdfDesc::Conductor {
+                    perfect_mirror: false,
+                    ..
+                }
+            ));
+            assert_eq!(textures[0].0, TexturedParam::K);
+        }
+        other => panic!("{other:?}"),
+    }
+    let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="material" value="Au"/><texture type="checkerboard" name="eta"/></bsdf></shape>"#).unwrap_err();
+    assert!(e.contains("not both"), "{e}");
+}
+
 #[test]
 fn refusals_name_the_parameter() {
-    let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf></shape>"#).unwrap_err();
-    assert!(e.contains("anisotropic roughness"), "{e}");
+    let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha_u" value="0.1"/></bsdf></shape>"#).unwrap_err();
+    assert!(e.contains("give both 'alpha_u' and 'alpha_v'"), "{e}");
+    let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><float name="alpha" value="0.1"/><float name="alpha_v" value="0.3"/></bsdf></shape>"#).unwrap_err();
+    assert!(e.contains("not both"), "{e}");
     let e = load(r#"<shape type="sphere"><bsdf type="roughdielectric"><float name="alpha" value="0"/></bsdf></shape>"#).unwrap_err();
     assert!(e.contains("invalid alpha = 0"), "{e}");
     let e = load(r#"<shape type="sphere"><bsdf type="roughconductor"><string name="distribution" value="phong"/></bsdf></shape>"#).unwrap_err();

@@ -139,7 +139,8 @@ fn check_reference_common(s: &SceneDesc) {
     assert_eq!(
         light.emitter,
         Some(EmitterDesc::Area {
-            radiance: [150.0; 3]
+            radiance: [150.0; 3],
+            texture: None,
         })
     );
     assert_eq!(

@@ -226,7 +226,10 @@ fn transforms_meshes_and_grids_must_be_usable() {
 #[test]
 fn emitters_area_only_on_shapes_and_one_environment() {
     let mut s = minimal_scene();
-    s.emitters.push(EmitterDesc::Area { radiance: [1.0; 3] });
+    s.emitters.push(EmitterDesc::Area {
+        radiance: [1.0; 3],
+        texture: None,
+    });
     has(&refused(&s), &["emitter 0", "must be attached to a shape"]);
     let mut s = minimal_scene();
     s.emitters

@@ -284,11 +284,32 @@ impl Bsdf {
                     let a = tex.eval_1(uv);
                     (c.distr.ax, c.distr.ay) = (a, a);
                 }
+                (P::Eta, BsdfKind::Conductor { eta, .. }) => *eta = tex.eval(uv),
+                (P::Eta, BsdfKind::RoughConductor(c)) => c.eta = tex.eval(uv),
+                (P::K, BsdfKind::Conductor { k, .. }) => *k = tex.eval(uv),
+                (P::K, BsdfKind::RoughConductor(c)) => c.k = tex.eval(uv),
+                (P::AlphaU, BsdfKind::RoughConductor(c)) => c.distr.ax = tex.eval_1(uv),
+                (P::AlphaU, BsdfKind::RoughDielectric(c)) => c.distr.ax = tex.eval_1(uv),
+                (P::AlphaV, BsdfKind::RoughConductor(c)) => c.distr.ay = tex.eval_1(uv),
+                (P::AlphaV, BsdfKind::RoughDielectric(c)) => c.distr.ay = tex.eval_1(uv),
                 // The validator refuses other pairs.
                 _ => {}
             }
         }
         b
+    }
+
+    /// True if the BSDF's value changes under a rotation about the normal
+    /// (different roughness along the tangent and the bitangent): it is
+    /// then evaluated in the tangent-oriented shading frame.
+    #[inline]
+    pub fn is_anisotropic(&self) -> bool {
+        match &self.kind {
+            BsdfKind::Diffuse { .. } => false,
+            BsdfKind::RoughConductor(b) => b.distr.ax != b.distr.ay,
+            BsdfKind::RoughDielectric(b) => b.distr.ax != b.distr.ay,
+            _ => false,
+        }
     }
 
     #[inline]

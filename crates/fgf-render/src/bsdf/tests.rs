@@ -67,7 +67,7 @@ fn bsdf(kind: BsdfKind) -> Bsdf {
 }
 
 /// The BSDFs under test: every rough model with both distributions and
-/// both sampling modes, plus the smooth plastic's diffuse lobe.
+/// both sampling modes (the metal and the dielectric also anisotropic), plus the smooth plastic's diffuse lobe.
 fn cases() -> Vec<(String, Bsdf)> {
     let mut v = Vec::new();
     for kind in [Distribution::Beckmann, Distribution::Ggx] {
@@ -94,6 +94,30 @@ fn cases() -> Vec<(String, Bsdf)> {
                         distr: d,
                     })),
                 ));
+                if a == 0.2 {
+                    // Anisotropic: rougher along y than along x.
+                    let d = Microfacet { ay: 0.7, ..d };
+                    let tag = format!("{kind:?} ax=0.2 ay=0.7 visible={visible}");
+                    v.push((
+                        format!("roughconductor {tag}"),
+                        bsdf(BsdfKind::RoughConductor(RoughConductor {
+                            eta: Spectrum::new(0.2, 0.9, 1.1),
+                            k: Spectrum::new(3.9, 2.4, 2.2),
+                            r: Spectrum::ONE,
+                            mirror: false,
+                            distr: d,
+                        })),
+                    ));
+                    v.push((
+                        format!("roughdielectric {tag}"),
+                        bsdf(BsdfKind::RoughDielectric(RoughDielectric {
+                            eta: 1.5,
+                            r: Spectrum::ONE,
+                            t: Spectrum::ONE,
+                            distr: d,
+                        })),
+                    ));
+                }
                 v.push((
                     format!("roughplastic {tag}"),
                     bsdf(BsdfKind::RoughPlastic(RoughPlastic::new(

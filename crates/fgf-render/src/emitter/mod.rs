@@ -19,9 +19,10 @@
 
 pub mod envmap;
 
-use crate::geometry::Geometry;
+use crate::geometry::{Geometry, Hit, PositionSample};
 use crate::math::{sample_uniform_sphere, UNIFORM_SPHERE_PDF};
 use crate::spectrum::{from_rgb, Spectrum};
+use crate::texture::Texture;
 use envmap::Envmap;
 use fgf_scene::EmitterDesc;
 use glam::{Mat3, Vec3};
@@ -32,6 +33,13 @@ pub enum Emitter {
     Area {
         shape: u32,
         radiance: Spectrum,
+    },
+    /// An area emitter whose `radiance` is a texture, looked up at the
+    /// emitting point's texture coordinates ([`Emitter::area_radiance`]);
+    /// a variant of its own so that untextured emitters pay nothing for it.
+    TexturedArea {
+        shape: u32,
+        texture: Arc<Texture>,
     },
     Point {
         p: Vec3,
@@ -69,13 +77,82 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+/// A textured area emitter's radiance at a hit (out of line: untextured
+/// emitters do not pay for it).
+#[inline(never)]
+fn texture_at_hit(t: &Texture, geom: &Geometry, hit: &Hit) -> Spectrum {
+    t.eval(geom.uv(hit))
+}
+
+/// The light sample of an area emitter at the point `ps` of its shape,
+/// seen from `p`, emitting `value(ps)` (nothing toward its back).
+#[inline(always)]
+fn area_sample(
+    geom: &Geometry,
+    shape: u32,
+    p: Vec3,
+    ps: PositionSample,
+    value: impl FnOnce(&PositionSample) -> Spectrum,
+) -> Option<LightSample> {
+    let v = ps.p - p;
+    let d2 = v.length_squared();
+    if !(d2 > 0.0) {
+        return None;
+    }
+    let dist = d2.sqrt();
+    let wi = v / dist;
+    // One-sided (shading normal): nothing toward the back.
+    let cos_l = -ps.ns.dot(wi);
+    if cos_l <= 0.0 {
+        return None;
+    }
+    let pdf = d2 / (cos_l * geom.areas[shape as usize]);
+    Some(LightSample {
+        wi,
+        dist,
+        value: value(&ps),
+        pdf,
+        delta: false,
+    })
+}
+
+/// [`area_sample`] for a textured emitter: the texture at the sampled
+/// point's texture coordinates (out of line: untextured emitters do not pay
+/// for it).
+#[inline(never)]
+fn textured_area_sample(
+    t: &Texture,
+    geom: &Geometry,
+    shape: u32,
+    p: Vec3,
+    u_sel: f32,
+    u: [f32; 2],
+) -> Option<LightSample> {
+    let hit = geom.sample_shape_hit(shape as usize, u_sel, u);
+    let ps = PositionSample {
+        p: hit.p,
+        n: hit.n,
+        ns: hit.ns,
+    };
+    area_sample(geom, shape, p, ps, |_| t.eval(geom.uv(&hit)))
+}
+
 impl Emitter {
     pub fn from_desc(d: &EmitterDesc, shape: Option<u32>) -> Emitter {
         match d {
-            EmitterDesc::Area { radiance } => Emitter::Area {
-                shape: shape.expect("area emitter on a shape"),
-                radiance: from_rgb(*radiance),
-            },
+            EmitterDesc::Area { radiance, texture } => {
+                let shape = shape.expect("area emitter on a shape");
+                match texture {
+                    None => Emitter::Area {
+                        shape,
+                        radiance: from_rgb(*radiance),
+                    },
+                    Some(t) => Emitter::TexturedArea {
+                        shape,
+                        texture: Arc::new(Texture::from_desc(t)),
+                    },
+                }
+            }
             EmitterDesc::Point {
                 position,
                 intensity,
@@ -130,6 +207,31 @@ impl Emitter {
         }
     }
 
+    /// The radiance an area emitter emits at `hit` (on its shape) toward
+    /// its front side: its `radiance`, or its texture at the hit's texture
+    /// coordinates. Mitsuba samples a textured emitter through the texture
+    /// and the shape's `(u, v)` map; fgf keeps sampling by area, an
+    /// estimator of the same expectation on the shapes that accept a
+    /// textured emitter (rectangle, disk, sphere, whose `(u, v)` cover them
+    /// once).
+    #[inline]
+    pub fn area_radiance(&self, geom: &Geometry, hit: &Hit) -> Spectrum {
+        match self {
+            Emitter::Area { radiance, .. } => *radiance,
+            Emitter::TexturedArea { texture, .. } => texture_at_hit(texture, geom, hit),
+            _ => Spectrum::ZERO,
+        }
+    }
+
+    /// The shape of an area emitter (textured or not).
+    #[inline]
+    pub fn area_shape(&self) -> Option<u32> {
+        match *self {
+            Emitter::Area { shape, .. } | Emitter::TexturedArea { shape, .. } => Some(shape),
+            _ => None,
+        }
+    }
+
     /// Whether this is an environment emitter (`constant`, `envmap`).
     #[inline]
     pub fn is_environment(&self) -> bool {
@@ -139,28 +241,15 @@ impl Emitter {
     /// Sample a direction toward the light from `p`.
     pub fn sample(&self, geom: &Geometry, p: Vec3, u_sel: f32, u: [f32; 2]) -> Option<LightSample> {
         match *self {
-            Emitter::Area { shape, radiance } => {
-                let ps = geom.sample_shape(shape as usize, u_sel, u);
-                let v = ps.p - p;
-                let d2 = v.length_squared();
-                if !(d2 > 0.0) {
-                    return None;
-                }
-                let dist = d2.sqrt();
-                let wi = v / dist;
-                // One-sided (shading normal): nothing toward the back.
-                let cos_l = -ps.ns.dot(wi);
-                if cos_l <= 0.0 {
-                    return None;
-                }
-                let pdf = d2 / (cos_l * geom.areas[shape as usize]);
-                Some(LightSample {
-                    wi,
-                    dist,
-                    value: radiance,
-                    pdf,
-                    delta: false,
-                })
+            Emitter::Area { shape, radiance } => area_sample(
+                geom,
+                shape,
+                p,
+                geom.sample_shape(shape as usize, u_sel, u),
+                |_| radiance,
+            ),
+            Emitter::TexturedArea { shape, ref texture } => {
+                textured_area_sample(texture, geom, shape, p, u_sel, u)
             }
             Emitter::Point { p: lp, intensity } => {
                 let v = lp - p;

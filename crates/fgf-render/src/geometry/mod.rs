@@ -28,6 +28,7 @@
 
 mod build;
 pub mod bvh;
+mod frame;
 mod pack;
 mod query;
 mod sample;

@@ -391,3 +391,74 @@ fn texture_coordinates_match_mitsuba() {
         );
     }
 }
+
+/// The tangent-oriented shading frame (`frame.rs`): orthonormal with
+/// `t = n × s`, and `s` along the parameterisation's `∂p/∂u` where it is
+/// known in closed form: a rectangle's local x, a sphere's azimuth
+/// direction, a disk's radial direction (the values themselves are
+/// checked against Mitsuba by `tests/test_anisotropic.py`).
+#[test]
+fn shading_frame_follows_dp_du() {
+    let rot = Mat4::from_rotation_y(0.4) * Mat4::from_rotation_x(-0.3);
+    let shapes = [
+        plain_shape(
+            GeometryDesc::Rectangle,
+            rot * Mat4::from_scale(Vec3::new(2.0, 0.5, 1.0)),
+        ),
+        plain_shape(
+            GeometryDesc::Sphere {
+                center: Vec3::ZERO,
+                radius: 1.0,
+            },
+            Mat4::from_translation(Vec3::new(5.0, 0.0, 0.0)) * rot,
+        ),
+        plain_shape(
+            GeometryDesc::Disk,
+            Mat4::from_translation(Vec3::new(-5.0, 0.0, 0.0)) * rot,
+        ),
+    ];
+    let g = Geometry::build(&shapes).unwrap();
+    let (m3, inv) = (
+        glam::Mat3::from_mat4(rot),
+        glam::Mat3::from_mat4(rot).inverse(),
+    );
+    let mut s = crate::math::Sampler::new(5, 0, 0);
+    let mut checked = [0; 3];
+    for _ in 0..600 {
+        let target = Vec3::new([0.0, 5.0, -5.0][(s.next_1d() * 3.0) as usize % 3], 0.0, 0.0)
+            + (Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5) * 0.8;
+        let o = target + crate::math::sample_uniform_sphere(s.next_2d()) * 3.0;
+        let Some(h) = g.intersect(
+            &Ray {
+                o,
+                d: (target - o).normalize(),
+            },
+            f32::INFINITY,
+        ) else {
+            continue;
+        };
+        let f = g.shading_frame(&h);
+        assert!((f.s.length() - 1.0).abs() < 1e-5 && f.s.dot(f.n).abs() < 1e-5);
+        assert!((f.t - f.n.cross(f.s)).length() < 1e-5 && f.n == h.ns);
+        let want = match h.shape {
+            0 => m3 * Vec3::X,
+            1 => {
+                let l = inv * (h.p - Vec3::new(5.0, 0.0, 0.0));
+                m3 * Vec3::new(-l.y, l.x, 0.0)
+            }
+            _ => {
+                let l = inv * (h.p - Vec3::new(-5.0, 0.0, 0.0));
+                m3 * Vec3::new(l.x, l.y, 0.0)
+            }
+        };
+        let want = (want - f.n * f.n.dot(want)).normalize();
+        assert!(
+            (f.s - want).length() < 1e-3,
+            "shape {}: s {} vs {want}",
+            h.shape,
+            f.s
+        );
+        checked[h.shape as usize] += 1;
+    }
+    assert!(checked.iter().all(|&c| c > 50), "{checked:?}");
+}

@@ -20,7 +20,7 @@
 
 use super::direct::{Scatterer, SurfaceVertex};
 use crate::emitter::Emitter;
-use crate::math::{mis_power, Frame, Sampler};
+use crate::math::{mis_power, Sampler};
 use crate::ray::{offset_point, Ray};
 use crate::spectrum::Spectrum;
 use crate::world::World;
@@ -61,8 +61,9 @@ impl World {
                 }
                 // The front side is the shading normal's (see `Emitter::sample`).
                 if h.ns.dot(ray.d) < 0.0 {
-                    if let Emitter::Area { radiance, .. } = self.emitters[e as usize] {
-                        l += radiance;
+                    let em = &self.emitters[e as usize];
+                    if em.area_shape().is_some() {
+                        l += em.area_radiance(&self.geom, &h);
                     }
                 }
             }
@@ -74,7 +75,7 @@ impl World {
         let bsdf = &*bsdf;
         let total = (n_e + n_b) as f32;
         let (c_e, c_b) = (n_e as f32 / total, n_b as f32 / total);
-        let frame = Frame::from_normal(h.ns);
+        let frame = self.frame_at(bsdf, &h);
         let wi_local = frame.to_local(-ray.d);
         if bsdf.is_smooth() && !self.emitters.is_empty() {
             let vertex = SurfaceVertex {
@@ -133,9 +134,11 @@ impl World {
                     let Some(e) = self.shapes[h2.shape as usize].emitter else {
                         continue;
                     };
-                    let Emitter::Area { radiance, shape } = self.emitters[e as usize] else {
+                    let em = &self.emitters[e as usize];
+                    let Some(shape) = em.area_shape() else {
                         continue;
                     };
+                    let radiance = em.area_radiance(&self.geom, &h2);
                     let cos_l = -h2.ns.dot(wo);
                     if !(cos_l > 0.0) {
                         continue;

@@ -27,7 +27,6 @@ mod direct;
 mod direct_lighting;
 
 use crate::bsdf::Bsdf;
-use crate::emitter::Emitter;
 use crate::geometry::Hit;
 use crate::math::{mis_power, Frame, Sampler};
 use crate::medium::{DistanceEvent, SegmentStart};
@@ -55,6 +54,20 @@ impl World {
         match bsdf.textures {
             None => Cow::Borrowed(bsdf),
             Some(_) => Cow::Owned(bsdf.at(self.geom.uv(h))),
+        }
+    }
+
+    /// The local frame of `bsdf` at hit `h`: Mitsuba's shading frame,
+    /// oriented by the surface tangent ([`crate::geometry::Geometry::shading_frame`]),
+    /// for an anisotropic BSDF; for the others, whose values do not change
+    /// under a rotation about the normal, the cheaper
+    /// [`Frame::from_normal`].
+    #[inline(always)]
+    pub(crate) fn frame_at(&self, bsdf: &Bsdf, h: &Hit) -> Frame {
+        if bsdf.is_anisotropic() {
+            self.geom.shading_frame(h)
+        } else {
+            Frame::from_normal(h.ns)
         }
     }
 
@@ -175,7 +188,9 @@ impl World {
             // the shading normal, as in `Emitter::sample`).
             if let Some(e) = info.emitter {
                 if !(depth == 0 && self.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
-                    if let Emitter::Area { radiance, shape } = self.emitters[e as usize] {
+                    let em = &self.emitters[e as usize];
+                    if let Some(shape) = em.area_shape() {
+                        let radiance = em.area_radiance(&self.geom, &h);
                         let w = if specular {
                             1.0
                         } else {
@@ -223,7 +238,7 @@ impl World {
             if depth + 1 >= self.max_depth && !thin_crossings {
                 break;
             }
-            let frame = Frame::from_normal(h.ns);
+            let frame = self.frame_at(bsdf, &h);
             let wi_local = frame.to_local(-ray.d);
             if bsdf.is_smooth() {
                 // Next-event estimation from the surface.

@@ -7,10 +7,12 @@
 //! rough coating) and `twosided` (the nested BSDF on both sides). The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
 //! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
-//! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
+//! a rough plugin's `alpha` (`alpha_u`, `alpha_v`), may be a `checkerboard` or `bitmap` texture
 //! where Mitsuba 3 allows one (which parameters, and how: [`super::textures`]).
-//! Anisotropic roughness, `mask` and `principled` are refused with a
-//! message naming them. A `<bsdf>` at the top level
+//! Anisotropic roughness follows Mitsuba's shading frame: `alpha_u` along
+//! the surface tangent `∂p/∂u` (each shape's parameterisation, see
+//! `fgf_render::geometry::frame`), `alpha_v` across it.
+//! `mask` and `principled` are refused with a message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -20,13 +22,14 @@
 //! | `dielectric` | `int_ior`, `ext_ior` | float or string | – | a number > 0 or a name of Mitsuba's table (`"water"`, `"bk7"`, `"diamond"`, ...) | `"bk7"` (1.5046), `"air"` (1.000277) | index of refraction inside and outside |
 //! | `dielectric` | `specular_reflectance`, `specular_transmittance` | float, rgb or texture | – | in [0, 1] | 1, 1 | |
 //! | `conductor` | `material` | string | – | `"none"` or a name of Mitsuba's table (`"Au"`, `"Ag"`, `"Cu"`, `"Al"`, ...) | `"none"` | `"none"` is a perfect mirror; not together with `eta`, `k` |
-//! | `conductor` | `eta`, `k` | float or rgb | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
+//! | `conductor` | `eta`, `k` | float, rgb or texture | – | ≥ 0 | 0, 1 (a perfect mirror) | complex index of refraction `eta + i k` |
 //! | `conductor` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | |
 //! | `thindielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | reflectance `2R/(1+R)` of the two faces; the rest is transmitted undeviated |
 //! | `roughdielectric` | `int_ior`, `ext_ior`, `specular_reflectance`, `specular_transmittance` | as `dielectric` | | | as `dielectric` | |
 //! | `roughconductor` | `material`, `eta`, `k`, `specular_reflectance` | as `conductor` | | | as `conductor` | |
 //! | rough plugins | `distribution` | string | – | `"beckmann"`, `"ggx"` | `"beckmann"` | microfacet normal distribution |
-//! | rough plugins | `alpha` | float, or texture (`roughconductor`, `roughdielectric`) | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope); `alpha_u`/`alpha_v` accepted when equal (`roughplastic`: `alpha` only) |
+//! | rough plugins | `alpha` | float, or texture (`roughconductor`, `roughdielectric`) | – | 1e-4 ≤ alpha ≤ 4 | 0.1 | roughness (Beckmann: RMS slope) |
+//! | `roughconductor`, `roughdielectric` | `alpha_u`, `alpha_v` | float or texture | – | 1e-4 ≤ alpha ≤ 4 | – | instead of `alpha` (both or neither): anisotropic roughness along the surface tangent `∂p/∂u` and across it |
 //! | rough plugins | `sample_visible` | boolean | – | – | true | sample only the normals visible from the incident direction |
 //! | `plastic`, `roughplastic` | `int_ior`, `ext_ior` | float or string | – | as `dielectric`, not equal | `"polypropylene"` (1.49), `"air"` | the coating's indices |
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | the base |
@@ -47,6 +50,13 @@
 //!         <string name="distribution" value="ggx"/>
 //!         <float name="alpha" value="0.2"/>
 //!         <string name="material" value="Cu"/>
+//!     </bsdf>
+//! </shape>
+//! <shape type="sphere">
+//!     <bsdf type="roughconductor">
+//!         <string name="material" value="Al"/>
+//!         <float name="alpha_u" value="0.05"/>
+//!         <float name="alpha_v" value="0.3"/>
 //!     </bsdf>
 //! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
@@ -100,9 +110,8 @@ const BSDFS: &[&str] = &[
 
 /// `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`, with
 /// Mitsuba's defaults (Beckmann, 0.1, true). `isotropic` refuses
-/// `alpha_u`/`alpha_v` (roughplastic). Anisotropic roughness is refused:
-/// its orientation follows the surface tangent `dp/du`, which the renderer
-/// does not carry.
+/// `alpha_u`/`alpha_v` (roughplastic). `alpha_u` is the roughness along the
+/// shading frame's tangent (`∂p/∂u`), `alpha_v` across it.
 fn microfacet_desc<'a>(
     ctx: &mut Ctx<'a>,
     p: &Props<'a>,
@@ -116,27 +125,33 @@ fn microfacet_desc<'a>(
         "ggx" => MicrofacetKind::Ggx,
         _ => MicrofacetKind::Beckmann,
     };
-    for name in ["alpha_u", "alpha_v"] {
-        if let Some(e) = p.peek(name).filter(|e| e.target.tag == "texture") {
-            return Err(e.node.err(format!(
-                "a texture as '{name}' (anisotropic roughness) is not supported; give one 'alpha'"
-            )));
-        }
-    }
-    // A texture alpha: the description keeps its mean (see `textures`).
-    let alpha = match p.peek("alpha").filter(|e| e.target.tag == "texture") {
-        Some(e) => match textures::color_or_texture(ctx, p, "alpha", [0.1; 3], ALPHA)? {
-            ColorOrTexture::Texture(t) => {
-                let mean = (t.mean() as f64).clamp(1e-4, 4.0);
-                textures.push((TexturedParam::Alpha, t));
-                Some((mean, e.node))
+    // A texture roughness: the description keeps its mean (see `textures`).
+    let mut alpha_of =
+        |name: &str, param: TexturedParam| -> Result<Option<(f64, &'a XNode)>, SceneError> {
+            match p.peek(name).filter(|e| e.target.tag == "texture") {
+                Some(e) => {
+                    if isotropic && name != "alpha" {
+                        return Err(e.node.err(format!(
+                            "this BSDF takes an isotropic 'alpha' only (no {name})"
+                        )));
+                    }
+                    Ok(
+                        match textures::color_or_texture(ctx, p, name, [0.1; 3], ALPHA)? {
+                            ColorOrTexture::Texture(t) => {
+                                let mean = (t.mean() as f64).clamp(1e-4, 4.0);
+                                textures.push((param, t));
+                                Some((mean, e.node))
+                            }
+                            ColorOrTexture::Color(c) => Some((c[0], e.node)),
+                        },
+                    )
+                }
+                None => p.float(name),
             }
-            ColorOrTexture::Color(c) => Some((c[0], e.node)),
-        },
-        None => p.float("alpha")?,
-    };
-    let au = p.float("alpha_u")?;
-    let av = p.float("alpha_v")?;
+        };
+    let alpha = alpha_of("alpha", TexturedParam::Alpha)?;
+    let au = alpha_of("alpha_u", TexturedParam::AlphaU)?;
+    let av = alpha_of("alpha_v", TexturedParam::AlphaV)?;
     let chk = |v: Option<(f64, &XNode)>, name: &str| -> Result<Option<f64>, SceneError> {
         v.map(|(v, node)| check(node, name, v, ALPHA)).transpose()
     };
@@ -161,11 +176,6 @@ fn microfacet_desc<'a>(
         }
         _ => return Err(p.node.err("give both 'alpha_u' and 'alpha_v'")),
     };
-    if alpha_u != alpha_v {
-        return Err(p.node.err(format!(
-            "anisotropic roughness (alpha_u = {alpha_u} != alpha_v = {alpha_v}) is not supported: it needs surface tangents; give one 'alpha'"
-        )));
-    }
     Ok(MicrofacetDesc {
         kind,
         alpha_u: alpha_u as f32,
@@ -189,14 +199,23 @@ fn iors(p: &Props, int_default: f64) -> Result<(f32, f32), SceneError> {
 }
 
 /// A conductor's `material` or `eta`/`k` (Mitsuba's defaults: a perfect
-/// mirror), as `(eta, k)`.
-fn conductor_eta_k(p: &Props) -> Result<([f64; 3], [f64; 3]), SceneError> {
+/// mirror), as `(eta, k)`. A textured `eta` or `k` is pushed to `tex`; the
+/// description keeps its mean.
+fn conductor_eta_k<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    tex: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<([f64; 3], [f64; 3]), SceneError> {
     let material = p.string("material")?;
-    let eta = p.color("eta")?;
-    let k = p.color("k")?;
+    let textured = |name: &str| p.peek(name).filter(|e| e.target.tag == "texture").is_some();
+    let (eta_tex, k_tex) = (textured("eta"), textured("k"));
+    let (eta, k) = (
+        if eta_tex { None } else { p.color("eta")? },
+        if k_tex { None } else { p.color("k")? },
+    );
     Ok(match material {
         Some((m, mnode)) if m != "none" => {
-            if eta.is_some() || k.is_some() {
+            if eta.is_some() || k.is_some() || eta_tex || k_tex {
                 return Err(mnode.err("give either 'material' or 'eta'/'k', not both"));
             }
             let (_, e, k) = tables::CONDUCTORS
@@ -215,12 +234,34 @@ fn conductor_eta_k(p: &Props) -> Result<([f64; 3], [f64; 3]), SceneError> {
             (*e, *k)
         }
         _ => {
-            let nonneg = |v: Option<([f64; 3], &XNode)>, name: &str, def: f64| match v {
-                None => Ok([def; 3]),
-                Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
+            let mut value = |v: Option<([f64; 3], &XNode)>,
+                             is_tex: bool,
+                             name: &str,
+                             param: TexturedParam,
+                             def: f64|
+             -> Result<[f64; 3], SceneError> {
+                if is_tex {
+                    return Ok(
+                        match textures::color_or_texture(ctx, p, name, [def; 3], NON_NEGATIVE)? {
+                            ColorOrTexture::Texture(t) => {
+                                let m = t.mean() as f64;
+                                tex.push((param, t));
+                                [m; 3]
+                            }
+                            ColorOrTexture::Color(c) => c,
+                        },
+                    );
+                }
+                match v {
+                    None => Ok([def; 3]),
+                    Some((c, node)) => check_rgb(node, name, c, NON_NEGATIVE),
+                }
             };
             // Mitsuba's defaults eta = 0, k = 1: a perfect mirror.
-            (nonneg(eta, "eta", 0.0)?, nonneg(k, "k", 1.0)?)
+            (
+                value(eta, eta_tex, "eta", TexturedParam::Eta, 0.0)?,
+                value(k, k_tex, "k", TexturedParam::K, 1.0)?,
+            )
         }
     })
 }
@@ -405,7 +446,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             }
         }
         "conductor" | "roughconductor" => {
-            let (eta, k) = conductor_eta_k(&p)?;
+            let (eta, k) = conductor_eta_k(ctx, &p, &mut tex)?;
             let specular_reflectance = col(
                 ctx,
                 "specular_reflectance",
@@ -413,7 +454,9 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                 1.0,
                 &mut tex,
             )?;
-            let perfect_mirror = eta == [0.0; 3] && k == [1.0; 3];
+            let perfect_mirror = eta == [0.0; 3]
+                && k == [1.0; 3]
+                && !tex.iter().any(|(p, _)| matches!(p, T::Eta | T::K));
             if ty == "conductor" {
                 BsdfDesc::Conductor {
                     eta: rgb(eta),

@@ -9,6 +9,7 @@
 //! | plugin | parameter | type | units | range | default | meaning |
 //! |---|---|---|---|---|---|---|
 //! | `area`, `constant` | `radiance` | float or rgb | power/(length² sr) | ≥ 0 | 1 | |
+//! | `area` | `radiance` | `checkerboard` or `bitmap` texture | power/(length² sr) | ≥ 0 | – | on a `rectangle`, `disk` or `sphere` only: the texture at the emitting point's texture coordinates (seen directly and in light sampling; [`super::textures`]) |
 //! | `point` | `intensity` | float or rgb | power/sr | ≥ 0 | 1 | |
 //! | `point` | `position` or `to_world` | point or transform | length | – | the origin | the light's position (the translation of `to_world`); not both |
 //! | `spot` | `intensity` | float or rgb | power/sr | ≥ 0 | 1 | on the axis |
@@ -32,6 +33,13 @@
 //! <shape type="rectangle">
 //!     <emitter type="area"><rgb name="radiance" value="10"/></emitter>
 //! </shape>
+//! <shape type="disk">
+//!     <emitter type="area">
+//!         <texture type="bitmap" name="radiance">
+//!             <string name="filename" value="textures/window.exr"/>
+//!         </texture>
+//!     </emitter>
+//! </shape>
 //! <emitter type="envmap">
 //!     <string name="filename" value="sky.exr"/>
 //!     <float name="scale" value="0.5"/>
@@ -48,14 +56,15 @@
 use super::context::{check_object_attrs, plugin_type, rgb, to_invertible_mat4, to_mat4, Ctx};
 use super::document::XNode;
 use super::props::{check_if, Props};
+use super::textures::{self, ColorOrTexture};
 use crate::desc::*;
 use crate::error::SceneError;
 use crate::validate::{BEAM_WIDTH, CUTOFF_ANGLE, NON_NEGATIVE, SCALE};
 use glam::{DVec3, Mat4, Vec3};
 
-pub(crate) fn emitter_desc(
-    ctx: &Ctx,
-    n: &XNode,
+pub(crate) fn emitter_desc<'a>(
+    ctx: &mut Ctx<'a>,
+    n: &'a XNode,
     on_shape: bool,
 ) -> Result<EmitterDesc, SceneError> {
     check_object_attrs(n)?;
@@ -87,8 +96,23 @@ pub(crate) fn emitter_desc(
     };
     let p = Props::new(n, &ctx.ids, known)?;
     let d = match ty {
-        "area" => EmitterDesc::Area {
-            radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),
+        "area" => match p.peek("radiance").filter(|e| e.target.tag == "texture") {
+            Some(_) => {
+                match textures::color_or_texture(ctx, &p, "radiance", [1.0; 3], NON_NEGATIVE)? {
+                    ColorOrTexture::Texture(t) => EmitterDesc::Area {
+                        radiance: [t.mean(); 3],
+                        texture: Some(t),
+                    },
+                    ColorOrTexture::Color(c) => EmitterDesc::Area {
+                        radiance: rgb(c),
+                        texture: None,
+                    },
+                }
+            }
+            None => EmitterDesc::Area {
+                radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),
+                texture: None,
+            },
         },
         "constant" => EmitterDesc::Constant {
             radiance: rgb(p.color_in("radiance", [1.0; 3], NON_NEGATIVE)?),

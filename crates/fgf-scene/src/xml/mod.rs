@@ -236,7 +236,7 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
                 area_decls.push(n);
             }
             "emitter" => {
-                emitters.push(emitters::emitter_desc(&ctx, n, false)?);
+                emitters.push(emitters::emitter_desc(&mut ctx, n, false)?);
                 emitter_nodes.push(n);
             }
             "medium" => {
@@ -261,7 +261,7 @@ fn instantiate(nodes: &[XNode], source: &str) -> Result<SceneDesc, SceneError> {
     for n in area_decls {
         if !ctx.area_refs.contains_key(n.attr("id").unwrap_or("")) {
             // Unreferenced: the emitter's own message (it needs a shape).
-            emitters::emitter_desc(&ctx, n, false)?;
+            emitters::emitter_desc(&mut ctx, n, false)?;
         }
     }
     nonexp::resolve_default_lengths(&mut ctx, &shapes)?;

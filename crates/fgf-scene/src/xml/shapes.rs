@@ -207,7 +207,22 @@ pub(crate) fn shape_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<ShapeDes
                     }
                 }
             }
-            Some(emitters::emitter_desc(ctx, e.target, true)?)
+            let d = emitters::emitter_desc(ctx, e.target, true)?;
+            if let EmitterDesc::Area {
+                texture: Some(_), ..
+            } = &d
+            {
+                // Mitsuba samples a textured emitter through the shape's
+                // (u, v) parameterisation, which covers a cube's faces (all
+                // mapped onto one square) and a mesh's triangles only as
+                // their texture coordinates do.
+                if !matches!(ty, "rectangle" | "disk" | "sphere") {
+                    return Err(e.node.err(format!(
+                        "a textured area-emitter 'radiance' on a '{ty}' shape is not supported (only on rectangle, disk and sphere)"
+                    )));
+                }
+            }
+            Some(d)
         }
         None => None,
     };

@@ -18,16 +18,30 @@
 //! `reflectance`; `specular_reflectance` of `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor` and `plastic`;
 //! `specular_transmittance` of the dielectrics; `plastic`'s
-//! `diffuse_reflectance`; and `alpha` of
+//! `diffuse_reflectance`; `eta` and `k` of `conductor` and
+//! `roughconductor` (values ≥ 0; the Fresnel term per channel of the
+//! texture's value at the hit; Mitsuba 3.9.1 itself refuses checkerboard
+//! colours above 1 there, as it reads them as reflectances); and `alpha`, `alpha_u`, `alpha_v` of
 //! `roughconductor` and `roughdielectric` (the roughness is then the mean of
 //! a checkerboard colour's channels — of `color1` where the colour would be
 //! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
-//! parameter's range everywhere (reflectances in [0, 1]). fgf refuses, in
-//! one line naming the feature: a texture as an area emitter's `radiance`
-//! or as a conductor's `eta` or `k` (Mitsuba allows both), `alpha_u`/`alpha_v` textures (anisotropic
-//! roughness), textures nested in a `checkerboard`, and the texture plugins
-//! fgf lacks (`mesh_attribute`, `volume`, ...).
+//! parameter's range everywhere (reflectances in [0, 1]).
+//!
+//! An `area` emitter's `radiance` may also be a texture (values ≥ 0), on a
+//! `rectangle`, `disk` or `sphere` ([`super::emitters`]): the emitted
+//! radiance is the texture at the emitting point's `(u, v)`, for hits and
+//! for light sampling. Mitsuba samples such an emitter through the texture
+//! (a checkerboard uniformly in `(u, v)`, a bitmap by its pixel values)
+//! mapped by the shape's `(u, v)` parameterisation; fgf samples by area:
+//! the same expectation on these three shapes, whose `(u, v)` cover them
+//! once. On a `cube` (six faces on one `(u, v)` square) or a mesh (covered
+//! as its texture coordinates are) Mitsuba's light sampling is not that
+//! estimator, so fgf refuses a textured emitter there.
+//!
+//! fgf refuses, in one line naming the feature: textures nested in a
+//! `checkerboard`, and the texture plugins fgf lacks (`mesh_attribute`,
+//! `volume`, ...).
 //!
 //! `plastic` chooses between its lobes with the texture's mean, as Mitsuba:
 //! the mean of a checkerboard's two colours, the mean luminance of a bitmap.
