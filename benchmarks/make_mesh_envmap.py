@@ -62,8 +62,10 @@ def torus() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     q01, q11 = idx[:-1, 1:].ravel(), idx[1:, 1:].ravel()
     # Counter-clockwise seen from outside (so the geometric normal agrees with n).
     tris = np.concatenate([np.stack([q00, q01, q11], -1), np.stack([q00, q11, q10], -1)])
-    flat = lambda x: x.reshape(-1, x.shape[-1]).astype(np.float32)  # noqa: E731
-    return flat(p), flat(n), flat(uv), tris.astype(np.int32)
+    def flat(x: np.ndarray) -> np.ndarray:
+        return np.asarray(x.reshape(-1, x.shape[-1]), dtype=np.float32)
+
+    return flat(p), flat(n), flat(uv), np.asarray(tris, dtype=np.int32)
 
 
 def write_ply(path: Path, p: np.ndarray, n: np.ndarray, uv: np.ndarray, tris: np.ndarray) -> None:
@@ -98,7 +100,7 @@ def sky() -> np.ndarray:
     s = np.array([np.sin(s_th) * np.cos(s_ph), np.cos(s_th), np.sin(s_th) * np.sin(s_ph)])
     ang = np.arccos(np.clip(d @ s, -1.0, 1.0))
     img = img + (200.0 * np.exp(-((ang / np.radians(3.0)) ** 2)))[..., None] * np.array([1.0, 0.9, 0.7])
-    return img.astype(np.float32)
+    return np.asarray(img, dtype=np.float32)
 
 
 def ensure(out: Path = OUT, force: bool = False) -> Path:
