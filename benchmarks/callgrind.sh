@@ -3,7 +3,13 @@
 #
 #   bash benchmarks/callgrind.sh [SCENE] [SPP] [THREADS] [name=value]...
 #
-# Defaults: scenes/reference/cube-homogeneous.xml, 16 spp, 1 thread. Builds the
+# Defaults: scenes/reference/cube-homogeneous.xml, 16 spp, 1 thread. For the
+# mesh scene, write its generated assets first:
+#
+#   python benchmarks/make_mesh_envmap.py
+#   bash benchmarks/callgrind.sh scenes/reference/mesh-envmap.xml 4 1 res=128
+#
+# Builds the
 # `render_scene` example (fgf-render, no Python) in target/callgrind (or
 # $CALLGRIND_TARGET_DIR) with
 # `-C target-cpu=x86-64-v3` (AVX2: valgrind 3.19 does not run the AVX-512 code

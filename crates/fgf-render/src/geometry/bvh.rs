@@ -181,6 +181,16 @@ impl Bvh {
         }
         let inv_d = Vec3A::from(d).recip();
         let o = Vec3A::from(o);
+        // A root that is a leaf (scenes of a few primitives, such as the
+        // reference ones) needs no stack, whose zeroing would cost about as
+        // much as the box test.
+        let root = &self.nodes[0];
+        if root.count > 0 {
+            if slab_hit(root.min, root.max, o, inv_d, t_max) {
+                t_max = hit(root.offset, root.count as u32, t_max);
+            }
+            return t_max;
+        }
         let neg = [inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0];
         let mut stack = [0u32; 64];
         let mut sp = 0usize;

@@ -76,16 +76,10 @@ impl TriPack {
         }
     }
 
-    /// The 4 triangles against one ray: the mask of lanes among `lanes` hit
+    /// The 4 triangles against one ray: the mask of triangle lanes hit
     /// with `0 < t < t_max`, and every lane's `t`, `u`, `v`.
     #[inline(always)]
-    pub(super) fn hits(
-        &self,
-        o: [Vec4; 3],
-        d: [Vec4; 3],
-        t_max: f32,
-        lanes: u32,
-    ) -> (u32, Vec4, Vec4, Vec4) {
+    pub(super) fn hits(&self, o: [Vec4; 3], d: [Vec4; 3], t_max: f32) -> (u32, Vec4, Vec4, Vec4) {
         let dot = |a: &[Vec4; 3], b: &[Vec4; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
         let w = [self.v0[0] - o[0], self.v0[1] - o[1], self.v0[2] - o[2]];
         // A ray parallel to the plane (or an empty lane) gives ±inf or NaN,
@@ -101,7 +95,7 @@ impl TriPack {
             & (u * self.tri_k + v).cmple(Vec4::ONE)
             & t.cmpgt(zero)
             & t.cmplt(Vec4::splat(t_max));
-        (ok.bitmask() & lanes & self.tri_mask, t, u, v)
+        (ok.bitmask() & self.tri_mask, t, u, v)
     }
 }
 

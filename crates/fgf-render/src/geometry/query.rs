@@ -29,18 +29,15 @@ impl Geometry {
         t_max: &mut f32,
         mut f: impl FnMut(u32, f32, f32, f32) -> f32,
     ) -> bool {
-        // Leaves start at multiples of 4 (see `Bvh::build`).
+        // Leaves start at multiples of 4 and the lanes after a leaf's last
+        // primitive are padding (see `Bvh::build`), which is in neither
+        // mask of its pack and never hit: the leaf is its whole packs.
         let end = start + count;
         let mut k = start;
         while k < end {
             let pack = &self.packs[(k / 4) as usize];
-            let lanes = if end - k >= 4 {
-                0xF
-            } else {
-                (1u32 << (end - k)) - 1
-            };
-            if pack.tri_mask & lanes != 0 {
-                let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max, lanes);
+            if pack.tri_mask != 0 {
+                let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max);
                 if mask != 0 {
                     let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
                     while mask != 0 {
@@ -56,7 +53,7 @@ impl Geometry {
                     }
                 }
             }
-            let mut other = pack.other_mask & lanes;
+            let mut other = pack.other_mask;
             while other != 0 {
                 let lane = other.trailing_zeros();
                 other &= other - 1;
