@@ -55,13 +55,18 @@ SCENES: list[tuple[str, str | None]] = [
 # Mitsuba's 12 participating-media regression scenes, as they are: an
 # `envmap` lights them and a `checkerboard` covers the background.
 PM = f"{MD}/tests/scenes/participating_media"
-# fgf's red channel is above Mitsuba's here: +0.37 % at K = 16 x 16 spp
-# (z 3.8), +0.22 % over 256 seeds x 16 spp (z 3.1), +0.07 % over 64 x 64
-# (z 1.1); the derived scene (constant sky, grey background) agrees. Not
-# yet settled (docs/compatibility.md): an expected failure, strict, so that
-# agreement shows, and only an assertion counts as the expected failure.
+# fgf is above Mitsuba here in the two channels with sigma_t = 10 (red and
+# blue), by a bias, not noise: 1024 fgf seeds against 2048 Mitsuba seeds
+# (16 spp each) give red +0.16 % (z 5.1), blue +0.21 % (z 3.7), green
+# +0.05 % (z 1.2); the per-seed image means are Gaussian (|skewness|,
+# |excess kurtosis| < 0.13), so the K = 16 standard error is sound and is
+# kept. The excess sits in the blocks of the medium; it needs paths deeper
+# than 3 (max_depth 2 and 3 agree) and the envmap (the scene without its
+# spheres agrees, and so did a copy under a constant sky). Cause not found
+# (docs/compatibility.md): an expected failure, strict, so that agreement
+# (or a change) shows, and only an assertion counts as the expected failure.
 SPECTRAL_XFAIL = pytest.mark.xfail(
-    strict=True, raises=AssertionError, reason="fgf +0.2 % red against Mitsuba (z 3): open, docs/compatibility.md"
+    strict=True, raises=AssertionError, reason="fgf +0.2 % red/blue against Mitsuba (z 4-5): open, docs/compatibility.md"
 )
 SCENES += [
     (f"{PM}/{name}.xml", None)
