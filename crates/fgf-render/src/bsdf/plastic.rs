@@ -259,17 +259,20 @@ fn lobe_transmittance(distr: &Microfacet, mu: f32, eta: f32, n: usize) -> f32 {
 /// one that would be computed).
 type CoatingKey = (bool, u32, u32, u32);
 
+/// `T(μ_i)` on the table's cosines, shared, and the internal reflectance.
+type CoatingTables = (std::sync::Arc<[f32; TABLE_RES]>, f32);
+
 /// Coating tables already computed in this process, shared by every
 /// `roughplastic` with the same parameters: a scene loaded again (one load
 /// per render, e.g. per seed) or many BSDFs alike build each table once.
 /// Bounded: cleared when it holds [`COATING_CACHE_MAX`] entries.
 static COATING_TABLES: std::sync::Mutex<
-    Option<std::collections::HashMap<CoatingKey, (std::sync::Arc<[f32; TABLE_RES]>, f32)>>,
+    Option<std::collections::HashMap<CoatingKey, CoatingTables>>,
 > = std::sync::Mutex::new(None);
 const COATING_CACHE_MAX: usize = 256;
 
 /// `T(μ_i)` on the table's cosines and the internal reflectance `F_int`.
-fn coating_tables(distr: &Microfacet, eta: f32) -> (std::sync::Arc<[f32; TABLE_RES]>, f32) {
+fn coating_tables(distr: &Microfacet, eta: f32) -> CoatingTables {
     let key = (
         distr.kind == super::microfacet::Distribution::Beckmann,
         distr.ax.to_bits(),
@@ -301,7 +304,7 @@ fn coating_tables(distr: &Microfacet, eta: f32) -> (std::sync::Arc<[f32; TABLE_R
     }
     // Mitsuba's internal reflectance: 2·mean(E_{1/η}(μ_i)·μ_i).
     let f_int = (2.0 * internal / TABLE_RES as f64) as f32;
-    let value: (std::sync::Arc<[f32; TABLE_RES]>, f32) = (t_ext.into(), f_int);
+    let value: CoatingTables = (t_ext.into(), f_int);
     let mut guard = lock();
     let map = guard.get_or_insert_with(Default::default);
     if map.len() >= COATING_CACHE_MAX {
