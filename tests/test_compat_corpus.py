@@ -61,13 +61,13 @@ PM = f"{MD}/tests/scenes/participating_media"
 # +0.05 % (z 1.2); the per-seed image means are Gaussian (|skewness|,
 # |excess kurtosis| < 0.13) and serially uncorrelated, so the K = 16
 # standard error is sound and is kept. The excess sits in the blocks of the
-# medium; it needs paths deeper than 3 (max_depth 2 and 3 agree), a
+# medium; it needs paths deeper than 3 (max_depth 2 and 3 agree) and a
 # chromatic sigma_t (grey agrees); one closed sphere of the medium over a
 # grey floor keeps it, more weakly under a constant sky than the envmap;
 # fgf's spectral MIS is not it (off, red is still +0.08 %, z 2.7). Cause
-# not found
-# (docs/compatibility.md): an expected failure, strict, so that agreement
-# (or a change) shows, and only an assertion counts as the expected failure.
+# not found (docs/compatibility.md): an expected failure, strict, so that
+# agreement (or a change) shows, and only an assertion counts as the
+# expected failure.
 SPECTRAL_XFAIL = pytest.mark.xfail(
     strict=True, raises=AssertionError, reason="fgf +0.2 % red/blue against Mitsuba (z 4-5): open, docs/compatibility.md"
 )
