@@ -388,3 +388,114 @@ def test_hostile_image_size_is_refused_before_allocating(tmp_path: Path) -> None
         fgf.render(p, spp=1, progress=False)
     msg = str(e.value)
     assert "100000x100000" in msg and "33554432" in msg, msg
+
+
+def png_file(pixels: np.ndarray, depth: int, color: int, chunks: tuple[tuple[bytes, bytes], ...] = ()) -> bytes:
+    """A PNG of `pixels` (h, w, samples; integers as stored) with bit depth
+    `depth`, PNG colour type `color` and the ancillary `chunks` before the
+    image data."""
+    h, w, _ = pixels.shape
+
+    def chunk(kind: bytes, data: bytes) -> bytes:
+        return struct.pack(">I", len(data)) + kind + data + struct.pack(">I", zlib.crc32(kind + data))
+
+    rows = []
+    for y in range(h):
+        if depth == 16:
+            row = pixels[y].astype(">u2").tobytes()
+        elif depth == 8:
+            row = pixels[y].astype(np.uint8).tobytes()
+        else:  # 1, 2 or 4 bits, one sample per pixel
+            row = np.packbits(np.unpackbits(pixels[y, :, 0].astype(np.uint8)[:, None], axis=1)[:, 8 - depth :]).tobytes()
+        rows.append(b"\0" + row)
+    ihdr = struct.pack(">IIBBBBB", w, h, depth, color, 0, 0, 0)
+    body = b"".join(chunk(k, d) for k, d in chunks)
+    return b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", ihdr) + body + chunk(b"IDAT", zlib.compress(b"".join(rows))) + chunk(b"IEND", b"")
+
+
+# 2x2 images, one texel per quadrant of a rectangle.
+RGB8 = np.array([[[230, 20, 20], [20, 230, 90]], [[40, 60, 230], [128, 200, 250]]])
+# 16-bit values that no 8-bit value gives (v·257 + 100): a reader that kept
+# only the high byte would be off by up to 0.4 %.
+RGB16 = RGB8 * 257 + 100
+# A fake ICC profile: libpng and Mitsuba ignore the chunk's content for
+# decoding (no colour management), so only its presence matters.
+ICCP = b"fake\0\0" + zlib.compress(b"\0" * 132)
+PNG_CASES = [
+    ("rgb8.png", png_file(RGB8, 8, 2), ""),
+    ("rgb16.png", png_file(RGB16, 16, 2), ""),
+    ("rgb16_raw.png", png_file(RGB16, 16, 2), '<boolean name="raw" value="true"/>'),
+    ("grey16.png", png_file(RGB16[..., :1], 16, 0), ""),
+    ("grey1.png", png_file(np.array([[[1], [0]], [[0], [1]]]), 1, 0), ""),
+    ("gama_linear.png", png_file(RGB8, 8, 2, ((b"gAMA", struct.pack(">I", 100000)),)), ""),
+    ("gama_raw.png", png_file(RGB8, 8, 2, ((b"gAMA", struct.pack(">I", 100000)),)), '<boolean name="raw" value="true"/>'),
+    ("srgb_chunk.png", png_file(RGB8, 8, 2, ((b"sRGB", b"\0"),)), ""),
+    ("iccp.png", png_file(RGB16, 16, 2, ((b"iCCP", ICCP),)), ""),
+]
+
+
+def test_png_bit_depths_and_colour_chunks_read_as_mitsuba(tmp_path: Path) -> None:
+    """16-bit and 1-bit PNGs, and PNGs with a gAMA, sRGB or iCCP chunk, in
+    `bitmap` textures. Mitsuba 3.9.1 reads 16-bit samples as v/65535 and
+    treats every PNG as sRGB-encoded whatever its gAMA/sRGB/iCCP chunks say
+    (its reader asks libpng for no gamma or colour transformation), so with
+    `raw` false the stored values go through the sRGB curve and with `raw`
+    true they are used as stored. Rendered with `direct` and BSDF samples
+    only under a white sky, a diffuse rectangle's pixel is exactly its
+    texel's reflectance, so the interior pixels of each texel must agree
+    to float precision, not only statistically."""
+    nearest = '<string name="filter_type" value="nearest"/>'
+    shapes = []
+    for i, (name, data, extra) in enumerate(PNG_CASES):
+        (tmp_path / name).write_bytes(data)
+        x, y = -1.9 + 1.9 * (i % 3), 1.9 - 1.9 * (i // 3)
+        shapes.append(
+            f'<shape type="rectangle">{place(x, y, SMALLER)}'
+            f'<bsdf type="diffuse">{bitmap("reflectance", name, nearest + extra)}</bsdf></shape>'
+        )
+    body = "\n".join(shapes)
+    direct = '<integrator type="direct"><integer name="emitter_samples" value="0"/><integer name="bsdf_samples" value="1"/></integrator>'
+    sensor = SENSOR.replace('<integrator type="path"><integer name="max_depth" value="3"/></integrator>', direct)
+    sensor = sensor.replace('value="32"', 'value="96"')
+    scene = tmp_path / "pngs.xml"
+    scene.write_text(f'<scene version="3.0.0">\n{sensor}\n{body}\n</scene>\n')
+    mine = fgf.render(scene, spp=4, seed=1, progress=False).astype(np.float64)
+    import mitsuba as mi
+
+    mi.set_variant("scalar_rgb")
+    theirs = np.array(mi.render(mi.load_file(str(scene)), seed=0, spp=4))[..., :3].astype(np.float64)
+    assert mine.shape == theirs.shape == (96, 96, 3)
+    # Interior pixels: Mitsuba's pixel equals its 8 neighbours, so no texel
+    # or rectangle edge crosses it, whatever the sample positions.
+    pad = np.pad(theirs, ((1, 1), (1, 1), (0, 0)), mode="edge")
+    flat = np.ones(theirs.shape[:2], bool)
+    for dy in (-1, 0, 1):
+        for dx in (-1, 0, 1):
+            flat &= (pad[1 + dy : 97 + dy, 1 + dx : 97 + dx] == theirs).all(axis=2)
+    # The texels as Mitsuba's rules give them: v / (2^depth - 1), then the
+    # sRGB curve unless raw, then (16 bits) rounded to half precision; every
+    # one must show in interior pixels, and nothing else.
+    def srgb(v: np.ndarray) -> np.ndarray:
+        return np.where(v <= 0.04045, v / 12.92, ((v + 0.055) / 1.055) ** 2.4)
+
+    def texels(name: str, extra: str) -> np.ndarray:
+        if name.startswith(("rgb16", "iccp")):
+            px, half = RGB16 / 65535, True
+        elif name == "grey16.png":
+            px, half = np.repeat(RGB16[..., :1], 3, 2) / 65535, True
+        elif name == "grey1.png":
+            px, half = np.repeat(np.array([[[1], [0]], [[0], [1]]]), 3, 2).astype(float), False
+        else:
+            px, half = RGB8 / 255, False
+        px = px if "raw" in extra else srgb(px)
+        return (px.astype(np.float16).astype(np.float64) if half else px).reshape(-1, 3)
+
+    expected = np.unique(np.concatenate([texels(n, e) for n, _, e in PNG_CASES]), axis=0)
+    expected = expected[(np.abs(expected - 1) > 1e-6).any(axis=1)]  # white is the sky's too
+    got = mine[flat]
+    got = got[(np.abs(got - 1) > 1e-6).any(axis=1)]
+    dist = np.abs(got[:, None, :] - expected[None, :, :]).max(axis=2)
+    assert dist.min(axis=1).max() <= 2e-6, "fgf has texel values Mitsuba's rules do not give"
+    assert dist.min(axis=0).max() <= 2e-6, "some texels show in no interior pixel"
+    diff = np.abs(mine - theirs)[flat]
+    assert diff.max() <= 2e-6, f"max |fgf - mitsuba| {diff.max()} on {flat.sum()} interior pixels"

@@ -196,9 +196,12 @@ pub fn write_png_preview(
 /// Read a PNG (grey, grey-alpha, RGB, RGBA, palette; 1 to 16 bits) into
 /// `(width, height, rgb data)` with values in [0, 1] as stored (still
 /// encoded by the file's transfer curve: the caller decides whether to
-/// linearise). Alpha is dropped. The size is checked against
-/// [`MAX_IMAGE_PIXELS`] before the pixels are read.
-pub fn read_png_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
+/// linearise), and the file's bit depth after expansion (8 or 16: palette and
+/// 1/2/4-bit grey images expand to 8). Alpha is dropped. gAMA, sRGB, cHRM and
+/// iCCP chunks are not applied (as in Mitsuba, which treats every PNG as
+/// sRGB-encoded). The size is checked against [`MAX_IMAGE_PIXELS`] before
+/// the pixels are read.
+pub fn read_png_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>, u8)> {
     let fmt = |e: png::DecodingError| IoError::format(path, format!("not a readable PNG: {e}"));
     let file = crate::read_regular(path).map_err(|e| IoError::format(path, e.to_string()))?;
     let limits = png::Limits {
@@ -242,7 +245,7 @@ pub fn read_png_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
             }
         }
     }
-    Ok((w, h, data))
+    Ok((w, h, data, if sixteen { 16 } else { 8 }))
 }
 
 /// The sRGB transfer curve inverted: an encoded value in [0, 1] to linear.

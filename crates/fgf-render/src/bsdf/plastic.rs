@@ -254,6 +254,66 @@ fn lobe_transmittance(distr: &Microfacet, mu: f32, eta: f32, n: usize) -> f32 {
     })
 }
 
+/// The coating's tables depend only on the distribution and `eta`: the key
+/// of [`COATING_TABLES`] (the exact bit patterns, so a cached table is the
+/// one that would be computed).
+type CoatingKey = (bool, u32, u32, u32);
+
+/// `T(μ_i)` on the table's cosines, shared, and the internal reflectance.
+type CoatingTables = (std::sync::Arc<[f32; TABLE_RES]>, f32);
+
+/// Coating tables already computed in this process, shared by every
+/// `roughplastic` with the same parameters: a scene loaded again (one load
+/// per render, e.g. per seed) or many BSDFs alike build each table once.
+/// Bounded: cleared when it holds [`COATING_CACHE_MAX`] entries.
+static COATING_TABLES: std::sync::Mutex<
+    Option<std::collections::HashMap<CoatingKey, CoatingTables>>,
+> = std::sync::Mutex::new(None);
+const COATING_CACHE_MAX: usize = 256;
+
+/// `T(μ_i)` on the table's cosines and the internal reflectance `F_int`.
+fn coating_tables(distr: &Microfacet, eta: f32) -> CoatingTables {
+    let key = (
+        distr.kind == super::microfacet::Distribution::Beckmann,
+        distr.ax.to_bits(),
+        distr.ay.to_bits(),
+        eta.to_bits(),
+    );
+    // A poisoned lock only means another thread panicked mid-insert of a
+    // complete value: the map is still consistent.
+    let lock = || COATING_TABLES.lock().unwrap_or_else(|e| e.into_inner());
+    if let Some(hit) = lock().as_ref().and_then(|m| m.get(&key)) {
+        return hit.clone();
+    }
+    // The cosines in parallel (about 1 s of Beckmann visible-normal
+    // inversions on one core), summed in index order: deterministic.
+    let rows: Vec<(f32, f64)> = (0..TABLE_RES)
+        .into_par_iter()
+        .map(|i| {
+            let mu = (i as f32 / (TABLE_RES - 1) as f32).max(1e-6);
+            let t = lobe_transmittance(distr, mu, eta, quadrature_order(eta));
+            let r = lobe_reflectance(distr, mu, 1.0 / eta, quadrature_order(1.0 / eta));
+            (t, (r * mu) as f64)
+        })
+        .collect();
+    let mut t_ext = Box::new([0.0f32; TABLE_RES]);
+    let mut internal = 0.0f64;
+    for (t, (ti, ri)) in t_ext.iter_mut().zip(&rows) {
+        *t = *ti;
+        internal += ri;
+    }
+    // Mitsuba's internal reflectance: 2·mean(E_{1/η}(μ_i)·μ_i).
+    let f_int = (2.0 * internal / TABLE_RES as f64) as f32;
+    let value: CoatingTables = (t_ext.into(), f_int);
+    let mut guard = lock();
+    let map = guard.get_or_insert_with(Default::default);
+    if map.len() >= COATING_CACHE_MAX {
+        map.clear();
+    }
+    map.insert(key, value.clone());
+    value
+}
+
 impl RoughPlastic {
     pub fn new(
         eta: f32,
@@ -262,29 +322,11 @@ impl RoughPlastic {
         nonlinear: bool,
         distr: Microfacet,
     ) -> Self {
-        // The cosines in parallel (about 1 s of Beckmann visible-normal
-        // inversions on one core), summed in index order: deterministic.
-        let rows: Vec<(f32, f64)> = (0..TABLE_RES)
-            .into_par_iter()
-            .map(|i| {
-                let mu = (i as f32 / (TABLE_RES - 1) as f32).max(1e-6);
-                let t = lobe_transmittance(&distr, mu, eta, quadrature_order(eta));
-                let r = lobe_reflectance(&distr, mu, 1.0 / eta, quadrature_order(1.0 / eta));
-                (t, (r * mu) as f64)
-            })
-            .collect();
-        let mut t_ext = Box::new([0.0f32; TABLE_RES]);
-        let mut internal = 0.0f64;
-        for (t, (ti, ri)) in t_ext.iter_mut().zip(&rows) {
-            *t = *ti;
-            internal += ri;
-        }
-        // Mitsuba's internal reflectance: 2·mean(E_{1/η}(μ_i)·μ_i).
-        let f_int = (2.0 * internal / TABLE_RES as f64) as f32;
+        let (t_ext, f_int) = coating_tables(&distr, eta);
         RoughPlastic {
             c: Coated::new(eta, diffuse, specular, nonlinear, f_int),
             distr,
-            t_ext: t_ext.into(),
+            t_ext,
         }
     }
 
@@ -344,6 +386,43 @@ impl RoughPlastic {
 mod tests {
     use super::*;
     use crate::bsdf::microfacet::Distribution;
+
+    /// Equal parameters share one table (a second build is a cache hit,
+    /// the same allocation), equal to the table computed directly; other
+    /// parameters get their own.
+    #[test]
+    fn coating_tables_are_shared_between_equal_parameters() {
+        let d = Microfacet {
+            kind: Distribution::Beckmann,
+            ax: 0.2345,
+            ay: 0.2345,
+            visible: true,
+        };
+        let s = Spectrum::splat(0.5);
+        let a = RoughPlastic::new(1.49, s, s, false, d);
+        let b = RoughPlastic::new(
+            1.49,
+            s * 0.5,
+            s,
+            true,
+            Microfacet {
+                visible: false,
+                ..d
+            },
+        );
+        assert!(std::sync::Arc::ptr_eq(&a.t_ext, &b.t_ext));
+        assert_eq!(a.c.f_int, b.c.f_int);
+        for i in [0usize, 17, TABLE_RES - 1] {
+            let mu = (i as f32 / (TABLE_RES - 1) as f32).max(1e-6);
+            assert_eq!(
+                a.t_ext[i],
+                lobe_transmittance(&d, mu, 1.49, quadrature_order(1.49))
+            );
+        }
+        let c = RoughPlastic::new(1.5, s, s, false, d);
+        assert!(!std::sync::Arc::ptr_eq(&a.t_ext, &c.t_ext));
+        assert_ne!(a.t_ext[TABLE_RES / 2], c.t_ext[TABLE_RES / 2]);
+    }
 
     /// An order-n Gauss–Legendre rule integrates polynomials of degree
     /// 2n - 1 exactly: `∫_0^1 x^k dx = 1/(k + 1)`.

@@ -10,7 +10,7 @@
 //! | both | `to_uv` | transform | – | finite | identity | maps `(u, v)` before the lookup: the upper-left 2×2 block and the x, y translation of the 4×4 transform (`<scale x="8" y="8"/>` repeats a texture 8 times) |
 //! | `checkerboard` | `color0`, `color1` | float or rgb | – | the parameter's range | 0.4, 0.2 | `color0` where the fractional parts of `u` and `v` are both below 1/2 or both above, else `color1` |
 //! | `bitmap` | `filename` | string | – | a PNG (`.png`, 1–16 bits, grey or colour; alpha is ignored), OpenEXR (`.exr`) or Radiance (`.hdr`) image of at most 2^25 pixels, found like every file | required | the top row is `v = 0`, the left column `u = 0` |
-//! | `bitmap` | `raw` | boolean | – | – | false | false: a PNG's values are sRGB-encoded and turned into linear values (as Mitsuba does); true: used as stored. EXR and HDR images are linear either way |
+//! | `bitmap` | `raw` | boolean | – | – | false | false: a PNG's values (`v/255`, or `v/65535` for 16 bits) are sRGB-encoded and turned into linear values, whatever the file's gAMA, sRGB or iCCP chunk says (as Mitsuba does); true: used as stored. A 16-bit PNG's texels are then rounded to half precision, as Mitsuba stores them. EXR and HDR images are linear either way |
 //! | `bitmap` | `filter_type` | string | – | `bilinear`, `nearest` | `bilinear` | bilinear interpolation between pixel centres, or the pixel containing `(u, v)` |
 //! | `bitmap` | `wrap_mode` | string | – | `repeat`, `mirror`, `clamp` | `repeat` | lookups outside `[0, 1)²` (also the neighbours of a bilinear lookup near an edge) |
 //!
@@ -232,16 +232,22 @@ fn texture_desc<'a>(ctx: &Ctx<'a>, n: &'a XNode) -> Result<TextureDesc, SceneErr
 }
 
 /// A bitmap's image as linear RGB (PNG decoded from sRGB unless `raw`).
+/// As Mitsuba 3.9.1's `bitmap` (its default storage format, `auto`), a
+/// 16-bit PNG's texels, once linear, are kept in half precision: rounded to
+/// the nearest IEEE half (a relative step of 2⁻¹¹), so that fgf's texture
+/// has Mitsuba's values, not the file's exact ones.
 fn read_bitmap(fnode: &XNode, file: &str, raw: bool) -> Result<RgbImage, SceneError> {
     let path = fnode.resolve(file);
     let ext = path
         .extension()
         .and_then(|e| e.to_str())
         .map(|e| e.to_ascii_lowercase());
+    let with_depth =
+        |r: Result<(usize, usize, Vec<f32>), fgf_io::IoError>| r.map(|(w, h, d)| (w, h, d, 32u8));
     let (read, srgb) = match ext.as_deref() {
         Some("png") => (fgf_io::image::read_png_rgb(&path), !raw),
-        Some("exr") => (fgf_io::image::read_exr_rgb(&path), false),
-        Some("hdr") | Some("rgbe") | Some("pic") => (fgf_io::image::read_hdr_rgb(&path), false),
+        Some("exr") => (with_depth(fgf_io::image::read_exr_rgb(&path)), false),
+        Some("hdr") | Some("rgbe") | Some("pic") => (with_depth(fgf_io::image::read_hdr_rgb(&path)), false),
         _ => {
             return Err(fnode.err(format!(
                 "bitmap image '{}': only PNG (.png), OpenEXR (.exr) and Radiance RGBE (.hdr) images are supported",
@@ -249,7 +255,7 @@ fn read_bitmap(fnode: &XNode, file: &str, raw: bool) -> Result<RgbImage, SceneEr
             )))
         }
     };
-    let (width, height, mut data) =
+    let (width, height, mut data, depth) =
         read.map_err(|e| fnode.err(format!("cannot read bitmap image: {e}")))?;
     if let Some(bad) = data.iter().find(|v| !v.is_finite()) {
         return Err(fnode.err(format!(
@@ -260,6 +266,10 @@ fn read_bitmap(fnode: &XNode, file: &str, raw: bool) -> Result<RgbImage, SceneEr
     if srgb {
         data.iter_mut()
             .for_each(|v| *v = fgf_io::image::srgb_decode(*v));
+    }
+    if depth == 16 {
+        data.iter_mut()
+            .for_each(|v| *v = half::f16::from_f32(*v).to_f32());
     }
     Ok(RgbImage {
         width,
