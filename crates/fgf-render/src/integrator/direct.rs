@@ -159,7 +159,8 @@ impl World {
 
     /// Transmittance from `from.p` (offset off the surface with normal
     /// `from.n`, if on one) toward direction `wi` over `dist`, through null
-    /// boundaries and media; zero if any other surface blocks it.
+    /// boundaries, media and the surfaces marked [`ShapeInfo::partial`]
+    /// (times their null transmission); zero if any other surface blocks it.
     ///
     /// One traversal ([`Geometry::for_each_hit`]) finds every surface on the
     /// segment: it stops at the first blocker, and otherwise returns the
@@ -228,7 +229,8 @@ impl World {
                 if (t, prim) <= done {
                     return true;
                 }
-                if !self.shapes[shape as usize].null {
+                let info = &self.shapes[shape as usize];
+                if !info.null && !info.partial {
                     return false;
                 }
                 // Insert in (t, prim) order, keeping the nearest MAX_CROSSINGS.
@@ -261,7 +263,19 @@ impl World {
                         return tr;
                     }
                 }
-                medium = self.shapes[shape as usize].target_medium(n, d, medium);
+                let info = &self.shapes[shape as usize];
+                if info.partial {
+                    // A mask or thin dielectric (volpath): its null
+                    // transmission toward the light, at the hit's texture
+                    // coordinates.
+                    let h = self.geom.hit_at(&ray, prim, t);
+                    let b = self.bsdf_at(&self.bsdfs[info.bsdf as usize], &h);
+                    tr *= b.null_transmission(Frame::from_normal(h.ns).to_local(-d));
+                    if tr == Spectrum::ZERO {
+                        return tr;
+                    }
+                }
+                medium = info.target_medium(n, d, medium);
                 start = SegmentStart::Surface;
                 done = (t, prim);
             }

@@ -4,13 +4,15 @@
 //! reflects and passes straight through), `roughdielectric`, `conductor` (a
 //! smooth metal), `roughconductor`, `plastic` (a diffuse base under a
 //! dielectric coating, Mitsuba 3's model), `roughplastic` (the same under a
-//! rough coating) and `twosided` (the nested BSDF on both sides). The rough plugins use a microfacet
+//! rough coating), `twosided` (the nested BSDF on both sides) and `mask`
+//! (the nested BSDF where the surface is opaque, a straight-through
+//! crossing elsewhere: cut-out leaves, fences). The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
 //! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
 //! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
 //! where Mitsuba 3 allows one (which parameters, and how: [`super::textures`]).
-//! Anisotropic roughness, `mask` and `principled` are refused with a
-//! message naming them. A `<bsdf>` at the top level
+//! Anisotropic roughness and `principled` are refused with a message
+//! naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -32,7 +34,9 @@
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | the base |
 //! | `plastic`, `roughplastic` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | scales the coating's reflection |
 //! | `plastic`, `roughplastic` | `nonlinear` | boolean | – | – | false | account for the colour shift of internal scattering (`ρ/(1 - ρ F_int)` instead of `ρ/(1 - F_int)`) |
-//! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
+//! | `twosided` | nested `bsdf` | – | – | one, not `twosided` or `mask` | required | |
+//! | `mask` | `opacity` | float or texture | – | in [0, 1] | 0.5 | the probability that a path scatters off the nested BSDF; otherwise it goes straight through (a `Null` interaction: under `volpath`/`volpathmis` it costs no depth and shadow rays pass with weight `1 − opacity`; under `path` a bounce, and shadow rays stop there, as in Mitsuba). A texture is read as a textured `alpha` ([`super::textures`]) |
+//! | `mask` | nested `bsdf` | – | – | one (a `twosided` one for a surface seen from both sides) | required | |
 //!
 //! ```xml
 //! <bsdf type="twosided" id="gold">
@@ -47,6 +51,14 @@
 //!         <string name="distribution" value="ggx"/>
 //!         <float name="alpha" value="0.2"/>
 //!         <string name="material" value="Cu"/>
+//!     </bsdf>
+//! </shape>
+//! <shape type="rectangle">
+//!     <bsdf type="mask">
+//!         <texture type="bitmap" name="opacity">
+//!             <string name="filename" value="textures/leaf-alpha.png"/>
+//!         </texture>
+//!         <bsdf type="twosided"><bsdf type="diffuse"/></bsdf>
 //!     </bsdf>
 //! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
@@ -64,7 +76,7 @@ use super::tables;
 use super::textures::{self, ColorOrTexture};
 use crate::desc::*;
 use crate::error::SceneError;
-use crate::validate::{ALPHA, IOR, NON_NEGATIVE, UNIT};
+use crate::validate::{ALPHA, IOR, NON_NEGATIVE, POSITIVE, UNIT};
 
 /// The BSDF of a shape without one, as Mitsuba 3.9's `Shape` constructor
 /// chooses it: a diffuse BSDF of reflectance 0.5, except on a shape with an
@@ -96,6 +108,7 @@ const BSDFS: &[&str] = &[
     "plastic",
     "roughplastic",
     "twosided",
+    "mask",
 ];
 
 /// `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`, with
@@ -171,6 +184,128 @@ fn microfacet_desc<'a>(
         alpha_u: alpha_u as f32,
         alpha_v: alpha_v as f32,
         sample_visible: p.bool_or("sample_visible", true)?,
+    })
+}
+
+/// A scalar parameter of `principled`: a float in [0, 1] or a texture
+/// (read by `eval_1`), with whether it was given as Mitsuba's
+/// `get_flag` says (a texture, or a float other than 0).
+fn principled_scalar<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    name: &str,
+    default: f32,
+    param: TexturedParam,
+    tex: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<(f32, bool), SceneError> {
+    if p.peek(name).is_some_and(|e| e.target.tag == "texture") {
+        return Ok(
+            match textures::color_or_texture(ctx, p, name, [default as f64; 3], UNIT)? {
+                ColorOrTexture::Texture(t) => {
+                    let m = t.mean().clamp(0.0, 1.0);
+                    tex.push((param, t));
+                    (m, true)
+                }
+                ColorOrTexture::Color(c) => (c[0] as f32, c[0] != 0.0),
+            },
+        );
+    }
+    Ok(match p.float(name)? {
+        Some((v, node)) => {
+            let v = check(node, name, v, UNIT)?;
+            (v as f32, v != 0.0)
+        }
+        None => (default, false),
+    })
+}
+
+/// `principled`'s parameters, with Mitsuba 3.9.1's defaults and its
+/// adjustments of `eta` (1 becomes 1.001, and `specular` 0 becomes 1e-3,
+/// when `spec_trans` is given).
+fn principled_desc<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    tex: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<PrincipledDesc, SceneError> {
+    use TexturedParam as T;
+    if let Some(e) = p.peek("anisotropic") {
+        let zero =
+            e.target.tag != "texture" && p.float("anisotropic")?.is_some_and(|(v, _)| v == 0.0);
+        if !zero {
+            return Err(e
+                .node
+                .err("principled: anisotropic > 0 is not supported yet"));
+        }
+    }
+    let base_color = match textures::color_or_texture(ctx, p, "base_color", [0.5; 3], UNIT)? {
+        ColorOrTexture::Color(c) => rgb(c),
+        ColorOrTexture::Texture(t) => {
+            let m = t.mean();
+            tex.push((T::BaseColor, t));
+            [m; 3]
+        }
+    };
+    let mut s = |name, default, param| principled_scalar(ctx, p, name, default, param, tex);
+    let (roughness, _) = s("roughness", 0.5, T::Roughness)?;
+    let (metallic, _) = s("metallic", 0.0, T::Metallic)?;
+    let (spec_trans, has_spec_trans) = s("spec_trans", 0.0, T::SpecTrans)?;
+    let (spec_tint, _) = s("spec_tint", 0.0, T::SpecTint)?;
+    let (sheen, _) = s("sheen", 0.0, T::Sheen)?;
+    let (sheen_tint, _) = s("sheen_tint", 0.0, T::SheenTint)?;
+    let (flatness, _) = s("flatness", 0.0, T::Flatness)?;
+    let (clearcoat, has_clearcoat) = s("clearcoat", 0.0, T::Clearcoat)?;
+    let (clearcoat_gloss, _) = s("clearcoat_gloss", 0.0, T::ClearcoatGloss)?;
+    let eta = match (p.float("eta")?, p.float("specular")?) {
+        (Some(_), Some((_, node))) => {
+            return Err(node.err("principled: give either 'eta' or 'specular', not both"))
+        }
+        (Some((v, node)), None) => {
+            let v = check(node, "eta", v, IOR)? as f32;
+            if has_spec_trans && v == 1.0 {
+                1.001
+            } else {
+                v
+            }
+        }
+        (None, sp) => {
+            let mut v = match sp {
+                Some((v, node)) => check(node, "specular", v, UNIT)? as f32,
+                None => 0.5,
+            };
+            if has_spec_trans && v == 0.0 {
+                v = 1e-3;
+            }
+            2.0 / (1.0 - (0.08 * v).sqrt()) - 1.0
+        }
+    };
+    let rate = |name: &str, positive: bool| -> Result<f32, SceneError> {
+        Ok(match p.float(name)? {
+            None => 1.0,
+            Some((v, node)) => check(
+                node,
+                name,
+                v,
+                if positive { POSITIVE } else { NON_NEGATIVE },
+            )? as f32,
+        })
+    };
+    Ok(PrincipledDesc {
+        base_color,
+        roughness,
+        metallic,
+        spec_trans,
+        spec_tint,
+        sheen,
+        sheen_tint,
+        flatness,
+        clearcoat,
+        clearcoat_gloss,
+        eta,
+        spec_rate: rate("main_specular_sampling_rate", true)?,
+        clearcoat_rate: rate("clearcoat_sampling_rate", false)?,
+        diffuse_rate: rate("diffuse_reflectance_sampling_rate", false)?,
+        has_spec_trans,
+        has_clearcoat,
     })
 }
 
@@ -310,6 +445,25 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             "sample_visible",
         ],
         "conductor" => &["material", "eta", "k", "specular_reflectance"],
+        "mask" => &["opacity"],
+        "principled" => &[
+            "base_color",
+            "roughness",
+            "metallic",
+            "spec_trans",
+            "spec_tint",
+            "sheen",
+            "sheen_tint",
+            "flatness",
+            "clearcoat",
+            "clearcoat_gloss",
+            "anisotropic",
+            "eta",
+            "specular",
+            "main_specular_sampling_rate",
+            "clearcoat_sampling_rate",
+            "diffuse_reflectance_sampling_rate",
+        ],
         "roughconductor" => &[
             "material",
             "eta",
@@ -462,6 +616,44 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                 },
             }
         }
+        "principled" => BsdfDesc::Principled(principled_desc(ctx, &p, &mut tex)?),
+        "mask" => {
+            let opacity = match p.peek("opacity").filter(|e| e.target.tag == "texture") {
+                Some(_) => match textures::color_or_texture(ctx, &p, "opacity", [0.5; 3], UNIT)? {
+                    ColorOrTexture::Texture(t) => {
+                        let mean = t.mean().clamp(0.0, 1.0);
+                        tex.push((T::Opacity, t));
+                        mean
+                    }
+                    ColorOrTexture::Color(c) => c[0] as f32,
+                },
+                None => match p.float("opacity")? {
+                    Some((v, node)) => check(node, "opacity", v, UNIT)? as f32,
+                    None => 0.5,
+                },
+            };
+            let nested = p.take_objects("bsdf");
+            match nested.len() {
+                1 => {}
+                0 => return Err(n.err("mask needs one nested BSDF")),
+                _ => return Err(nested[1].node.err("mask takes one nested BSDF")),
+            }
+            if depth > 4 {
+                return Err(n.err("BSDFs nested too deep"));
+            }
+            let pushed = n
+                .attr("id")
+                .map(|id| ctx.resolving.push(id.to_string()))
+                .is_some();
+            let inner = bsdf_desc(ctx, nested[0].target, depth + 1);
+            if pushed {
+                ctx.resolving.pop();
+            }
+            BsdfDesc::Mask {
+                opacity,
+                nested: Box::new(inner?),
+            }
+        }
         _ => {
             let nested = p.take_objects("bsdf");
             match nested.len() {
@@ -476,6 +668,9 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             let target = nested[0].target;
             if target.attr("type") == Some("twosided") {
                 return Err(nested[0].node.err("twosided BSDFs cannot be nested"));
+            }
+            if target.attr("type") == Some("mask") {
+                return Err(nested[0].node.err(crate::validate::TWOSIDED_MASK));
             }
             if depth > 4 {
                 return Err(n.err("BSDFs nested too deep"));

@@ -18,8 +18,8 @@
 //! `reflectance`; `specular_reflectance` of `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor` and `plastic`;
 //! `specular_transmittance` of the dielectrics; `plastic`'s
-//! `diffuse_reflectance`; and `alpha` of
-//! `roughconductor` and `roughdielectric` (the roughness is then the mean of
+//! `diffuse_reflectance`; `mask`'s `opacity`; and `alpha` of
+//! `roughconductor` and `roughdielectric` (the roughness, or opacity, is then the mean of
 //! a checkerboard colour's channels — of `color1` where the colour would be
 //! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
