@@ -4,15 +4,18 @@
 //! reflects and passes straight through), `roughdielectric`, `conductor` (a
 //! smooth metal), `roughconductor`, `plastic` (a diffuse base under a
 //! dielectric coating, Mitsuba 3's model), `roughplastic` (the same under a
-//! rough coating), `twosided` (the nested BSDF on both sides) and `mask`
+//! rough coating), `twosided` (the nested BSDF on both sides), `mask`
 //! (the nested BSDF where the surface is opaque, a straight-through
-//! crossing elsewhere: cut-out leaves, fences). The rough plugins use a microfacet
+//! crossing elsewhere: cut-out leaves, fences) and `principled` (Mitsuba 3's
+//! Disney-style BSDF: diffuse with retro-reflection and sheen, a GGX
+//! specular lobe blending dielectric and metal, rough transmission and a
+//! clearcoat; formulas in `crates/fgf-render/src/bsdf/principled.rs`). The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
 //! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
 //! a rough plugin's `alpha`, may be a `checkerboard` or `bitmap` texture
 //! where Mitsuba 3 allows one (which parameters, and how: [`super::textures`]).
-//! Anisotropic roughness and `principled` are refused with a message
-//! naming them. A `<bsdf>` at the top level
+//! Anisotropic roughness (also `principled`'s `anisotropic` > 0) and
+//! `principledthin` are refused with a message naming them. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -37,6 +40,18 @@
 //! | `twosided` | nested `bsdf` | – | – | one, not `twosided` or `mask` | required | |
 //! | `mask` | `opacity` | float or texture | – | in [0, 1] | 0.5 | the probability that a path scatters off the nested BSDF; otherwise it goes straight through (a `Null` interaction: under `volpath`/`volpathmis` it costs no depth and shadow rays pass with weight `1 − opacity`; under `path` a bounce, and shadow rays stop there, as in Mitsuba). A texture is read as a textured `alpha` ([`super::textures`]) |
 //! | `mask` | nested `bsdf` | – | – | one (a `twosided` one for a surface seen from both sides) | required | |
+//! | `principled` | `base_color` | float, rgb or texture | – | in [0, 1] | 0.5 | the diffuse colour, the metal's reflectance at normal incidence, the tint of `spec_tint`/`sheen_tint` and (as `√base_color`) of the transmission |
+//! | `principled` | `roughness` | float or texture | – | in [0, 1] | 0.5 | GGX `α = max(0.001, roughness²)` of the main lobes; also scales the diffuse retro-reflection |
+//! | `principled` | `metallic` | float or texture | – | in [0, 1] | 0 | blends toward a Schlick metal of reflectance `base_color` (no diffuse, sheen or transmission) |
+//! | `principled` | `spec_trans` | float or texture | – | in [0, 1] | 0 | weight of the rough (GGX) transmission through an interface of index `eta`; with it, the surface transmits (not inside `twosided`) |
+//! | `principled` | `eta` | float | – | > 0 (1 becomes 1.001 when `spec_trans` is given) | from `specular` | interior over exterior index of refraction; not together with `specular` |
+//! | `principled` | `specular` | float | – | in [0, 1] (0 becomes 1e-3 when `spec_trans` is given) | 0.5 | sets `eta = 2/(1 − √(0.08·specular)) − 1` (0.5: 1.5) |
+//! | `principled` | `spec_tint` | float or texture | – | in [0, 1] | 0 | tints the dielectric reflection toward `base_color` |
+//! | `principled` | `sheen`, `sheen_tint` | float or texture | – | in [0, 1] | 0, 0 | grazing-angle sheen, and its tint toward `base_color` |
+//! | `principled` | `flatness` | float or texture | – | in [0, 1] | 0 | blends the diffuse lobe toward the "fake subsurface" one |
+//! | `principled` | `clearcoat`, `clearcoat_gloss` | float or texture | – | in [0, 1] | 0, 0 | a second, GTR1 reflection lobe (roughness from 0.1 at gloss 0 to 0.001 at gloss 1) |
+//! | `principled` | `anisotropic` | float | – | 0 | 0 | > 0 is refused (it needs surface tangents) |
+//! | `principled` | `main_specular_sampling_rate`, `clearcoat_sampling_rate`, `diffuse_reflectance_sampling_rate` | float | – | > 0, ≥ 0, ≥ 0 | 1, 1, 1 | relative rates at which sampling picks the main GGX lobes, the clearcoat and the diffuse lobe (they change the noise, not the image) |
 //!
 //! ```xml
 //! <bsdf type="twosided" id="gold">
@@ -59,6 +74,14 @@
 //!             <string name="filename" value="textures/leaf-alpha.png"/>
 //!         </texture>
 //!         <bsdf type="twosided"><bsdf type="diffuse"/></bsdf>
+//!     </bsdf>
+//! </shape>
+//! <shape type="sphere">
+//!     <bsdf type="principled">
+//!         <rgb name="base_color" value="0.9, 0.6, 0.2"/>
+//!         <float name="metallic" value="0.8"/>
+//!         <float name="roughness" value="0.3"/>
+//!         <float name="clearcoat" value="0.5"/>
 //!     </bsdf>
 //! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
@@ -109,6 +132,7 @@ const BSDFS: &[&str] = &[
     "roughplastic",
     "twosided",
     "mask",
+    "principled",
 ];
 
 /// `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`, with
