@@ -4,7 +4,8 @@ A leaf-like rectangle (a `mask` around a diffuse BSDF) hangs
 between a diffuse floor and two lights: a rectangular area light above it
 and a point light, so that the floor sees both through the leaf; a small
 area light behind the leaf faces the camera, which sees it through the
-leaf. The opacity is a float or a checkerboard. A small `max_depth` (3)
+leaf. The opacity is a float or a checkerboard; a `thindielectric` leaf,
+the other BSDF with a null lobe, is rendered too. A small `max_depth` (3)
 makes the integrators' treatment of the transparent part visible: Mitsuba's
 `path` counts crossing it as a bounce and its shadow rays stop at the leaf
 (so the point light casts a full shadow), `volpath` and `volpathmis` give
@@ -86,6 +87,10 @@ BSDFS = {
     "float": f'<bsdf type="mask"><float name="opacity" value="0.6"/>{DIFFUSE}</bsdf>',
     # mask(twosided(diffuse)), checkerboard opacity
     "checkerboard": f'<bsdf type="mask">{CHECKER}<bsdf type="twosided">{DIFFUSE}</bsdf></bsdf>',
+    # The other BSDF with a null lobe: Mitsuba's volpath passes shadow rays
+    # through a thin dielectric too (with weight (1 - R')T), so the point
+    # light shines through it there and not under path.
+    "thindielectric": '<bsdf type="thindielectric"><float name="int_ior" value="1.7"/></bsdf>',
 }
 
 

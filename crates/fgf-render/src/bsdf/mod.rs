@@ -374,17 +374,11 @@ impl Bsdf {
         matches!(self.kind, BsdfKind::Null)
     }
 
-    /// `thindielectric`: its transmission leaves the direction unchanged, so
-    /// under `volpath` the path tracer counts it as an index-matched crossing
-    /// (no depth), as Mitsuba 3's volpath counts its `Null` lobe
-    /// ([`crate::World::thin_is_crossing`]).
-    #[inline]
-    pub fn is_thin(&self) -> bool {
-        matches!(self.kind, BsdfKind::ThinDielectric { .. })
-    }
-
     /// True if the BSDF has a null lobe besides its others (see
-    /// [`BsdfSample::null`]): `thindielectric`, `mask`.
+    /// [`BsdfSample::null`]): `thindielectric`, `mask`. Under `volpath`
+    /// the path tracer counts a sample of it as an index-matched crossing
+    /// (no depth), as Mitsuba 3's volpath counts a `Null` lobe
+    /// ([`crate::World::thin_is_crossing`]).
     #[inline]
     pub fn has_null_lobe(&self) -> bool {
         matches!(

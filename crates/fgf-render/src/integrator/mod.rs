@@ -220,8 +220,8 @@ impl World {
             // leads to can contribute unless depth + 1 < max_depth.
             // A null-lobe sample may not count (see below), so its sample
             // is drawn first and the test made after it.
-            let thin_crossings = self.thin_is_crossing && bsdf.has_null_lobe();
-            if depth + 1 >= self.max_depth && !thin_crossings {
+            let null_crossings = self.thin_is_crossing && bsdf.has_null_lobe();
+            if depth + 1 >= self.max_depth && !null_crossings {
                 break;
             }
             let frame = Frame::from_normal(h.ns);
@@ -250,7 +250,7 @@ impl World {
             // weighted against light sampling from the vertex before, whose
             // shadow rays pass the surface); under path a bounce, as in
             // Mitsuba's path.
-            let crossing = thin_crossings && bs.null;
+            let crossing = null_crossings && bs.null;
             if !crossing && depth + 1 >= self.max_depth {
                 break;
             }
