@@ -40,10 +40,10 @@ def test_render_quiet_and_png_path(tmp_path):
 
 def test_bad_scene_exits_2_with_message_and_no_traceback(tmp_path):
     bad = tmp_path / "bad.xml"
-    bad.write_text('<scene version="3.0.0">\n  <bsdf type="principled"/>\n</scene>\n')
+    bad.write_text('<scene version="3.0.0">\n  <bsdf type="principledthin"/>\n</scene>\n')
     r = fgf_cli("render", bad, "-o", tmp_path / "o.exr")
     assert r.returncode == 2
-    assert "principled" in r.stderr and "bad.xml" in r.stderr
+    assert "principledthin" in r.stderr and "bad.xml" in r.stderr
     assert "Traceback" not in r.stderr
     assert not (tmp_path / "o.exr").exists()
     r = fgf_cli("render", tmp_path / "missing.xml", "-o", tmp_path / "o.exr")

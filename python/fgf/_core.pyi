@@ -220,6 +220,17 @@ def bsdf_eval_pdf(
     """The BSDF of shape ``shape`` at ``(n, 3)`` local-frame direction pairs (normal ``+z``):
     ``(f(wi, wo)·|cos θ_o| (n, 3), pdf of sampling wo (n,))``, as Mitsuba's ``BSDF.eval``/``pdf``."""
 
+def bsdf_sample(
+    scene: str,
+    shape: int,
+    wi: _F32Array,
+    u: _F32Array,
+    defines: Sequence[tuple[str, str]] | None = None,
+) -> tuple[_F32Array, _F32Array, _F32Array]:
+    """The BSDF of shape ``shape`` sampled at ``(n, 3)`` local-frame directions ``wi`` with the
+    random numbers ``u`` (``(n, 3)``: the lobe choice, then the direction): ``(wo (n, 3),
+    weight f·|cos θ_o|/pdf (n, 3), pdf (n,))``, zeros where no sample, as Mitsuba's ``BSDF.sample``."""
+
 _U64Array: TypeAlias = npt.NDArray[np.uint64]
 
 class PreparedScene:

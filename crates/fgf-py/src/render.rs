@@ -490,9 +490,68 @@ fn shading_frame<'py>(
     ))
 }
 
+/// `Bsdf::sample` of a shape's BSDF for each row of `wi` (local frame)
+/// with the random numbers `u` (`(n, 3)`: `u1`, then `u2`): the sampled
+/// directions, weights and pdfs (zero weight and pdf where no sample).
+#[pyfunction]
+#[pyo3(signature = (scene, shape, wi, u, defines=None))]
+#[allow(clippy::type_complexity)]
+fn bsdf_sample<'py>(
+    py: Python<'py>,
+    scene: PathBuf,
+    shape: usize,
+    wi: PyReadonlyArray2<'py, f32>,
+    u: PyReadonlyArray2<'py, f32>,
+    defines: Option<Vec<(String, String)>>,
+) -> PyResult<(Bound<'py, PyAny>, Bound<'py, PyAny>, Bound<'py, PyAny>)> {
+    let desc = load_scene(py, &scene, defines)?;
+    let Some(s) = desc.shapes.get(shape) else {
+        return Err(ParameterError::new_err(format!(
+            "shape = {shape}; the scene has {} shapes",
+            desc.shapes.len()
+        )));
+    };
+    let (wi, u) = (wi.as_array(), u.as_array());
+    if wi.ncols() != 3 || u.shape() != wi.shape() {
+        return Err(ParameterError::new_err(format!(
+            "wi and u must be (n, 3) arrays of the same shape, got {:?} and {:?}",
+            wi.shape(),
+            u.shape()
+        )));
+    }
+    let bsdf = fgf_render::bsdf::Bsdf::from_desc(&desc.bsdfs[s.bsdf]);
+    let n = wi.nrows();
+    let (mut wo, mut w, mut pdf) = (
+        Vec::with_capacity(3 * n),
+        Vec::with_capacity(3 * n),
+        Vec::with_capacity(n),
+    );
+    for k in 0..n {
+        let v = fgf_render::spectrum::Spectrum::new(wi[[k, 0]], wi[[k, 1]], wi[[k, 2]]);
+        match bsdf.sample(v, u[[k, 0]], [u[[k, 1]], u[[k, 2]]]) {
+            Some(bs) => {
+                wo.extend_from_slice(&[bs.wo.x, bs.wo.y, bs.wo.z]);
+                w.extend_from_slice(&[bs.weight.x, bs.weight.y, bs.weight.z]);
+                pdf.push(bs.pdf);
+            }
+            None => {
+                wo.extend_from_slice(&[0.0; 3]);
+                w.extend_from_slice(&[0.0; 3]);
+                pdf.push(0.0);
+            }
+        }
+    }
+    Ok((
+        PyArray1::from_vec(py, wo).reshape([n, 3])?.into_any(),
+        PyArray1::from_vec(py, w).reshape([n, 3])?.into_any(),
+        PyArray1::from_vec(py, pdf).into_any(),
+    ))
+}
+
 pub fn register(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bsdf_eval_pdf, m)?)?;
     m.add_function(wrap_pyfunction!(shading_frame, m)?)?;
+    m.add_function(wrap_pyfunction!(bsdf_sample, m)?)?;
     m.add_function(wrap_pyfunction!(render_scene, m)?)?;
     m.add_function(wrap_pyfunction!(write_exr, m)?)?;
     m.add_function(wrap_pyfunction!(write_png, m)?)?;

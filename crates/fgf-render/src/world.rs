@@ -17,6 +17,9 @@ pub struct ShapeInfo {
     pub bsdf: u32,
     /// The BSDF is `null` (shadow rays pass through).
     pub null: bool,
+    /// Shadow rays pass with the BSDF's null transmission (a `mask` or
+    /// `thindielectric` under `volpath`, see [`World::thin_is_crossing`]).
+    pub partial: bool,
     /// Index into `World::emitters` of its area emitter.
     pub emitter: Option<u32>,
     pub interior: Option<u32>,
@@ -56,10 +59,14 @@ pub struct World {
     /// `Some((emitter_samples, bsdf_samples))` for Mitsuba's `direct`
     /// integrator; `None` for `path` and `volpath`.
     pub direct_samples: Option<(u32, u32)>,
-    /// A `thindielectric`'s straight-through transmission is an
-    /// index-matched crossing that costs no depth (`volpath`, as Mitsuba's
-    /// volpath treats that lobe as a null interaction); under `path` it is
-    /// a bounce like any other, as in Mitsuba's `path`.
+    /// A null-lobe sample (a `thindielectric`'s straight-through
+    /// transmission, a `mask`'s transparent part) is an index-matched
+    /// crossing that costs no depth and leaves the path's last scattering
+    /// vertex as it was, and shadow rays pass such surfaces with their null
+    /// transmission (`volpath`, as Mitsuba's volpath and volpathmis treat
+    /// null interactions); under `path` and `direct` it is a bounce like any
+    /// other and the surfaces block shadow rays, as in Mitsuba's `path` and
+    /// `direct`.
     pub thin_is_crossing: bool,
     /// Some shape has a `null` BSDF: paths then ask for the two nearest
     /// hits, so that crossing the boundary needs no second traversal.
@@ -82,6 +89,7 @@ impl World {
         let mut emitters = Vec::new();
         let mut shapes = Vec::new();
         let index = |m: Option<usize>| m.map(|i| i as u32);
+        let volpath = desc.integrator.kind == fgf_scene::IntegratorKind::Volpath;
         for (i, s) in desc.shapes.iter().enumerate() {
             let emitter = match &s.emitter {
                 Some(e) => {
@@ -99,6 +107,7 @@ impl World {
             shapes.push(ShapeInfo {
                 bsdf: s.bsdf as u32,
                 null: bsdfs[s.bsdf].is_null(),
+                partial: volpath && bsdfs[s.bsdf].has_null_lobe(),
                 emitter,
                 interior: index(s.interior),
                 exterior: index(s.exterior),
@@ -139,7 +148,7 @@ impl World {
                 } => Some((emitter_samples, bsdf_samples)),
                 _ => None,
             },
-            thin_is_crossing: desc.integrator.kind == fgf_scene::IntegratorKind::Volpath,
+            thin_is_crossing: volpath,
         })
     }
 

@@ -219,6 +219,15 @@ pub enum BsdfDesc {
     },
     /// `twosided`: the nested BSDF on both sides.
     TwoSided(Box<BsdfDesc>),
+    /// `mask`: the nested BSDF with probability `opacity` (in [0, 1]; a
+    /// texture's mean if textured), else a straight-through (null)
+    /// interaction.
+    Mask {
+        opacity: f32,
+        nested: Box<BsdfDesc>,
+    },
+    /// `principled`: Mitsuba 3's Disney-style principled BSDF.
+    Principled(PrincipledDesc),
     /// `thindielectric`: a thin slab with two smooth faces.
     ThinDielectric {
         int_ior: f32,
@@ -286,6 +295,49 @@ pub enum TexturedParam {
     Eta,
     /// A conductor's `k` (imaginary part).
     K,
+    /// `mask`'s `opacity` (Mitsuba's `eval_1`, as [`TexturedParam::Alpha`]).
+    Opacity,
+    /// `principled`'s `base_color` (a colour) and its scalar parameters
+    /// (`eval_1`, as [`TexturedParam::Alpha`]).
+    BaseColor,
+    Roughness,
+    Metallic,
+    SpecTrans,
+    SpecTint,
+    Sheen,
+    SheenTint,
+    Flatness,
+    Clearcoat,
+    ClearcoatGloss,
+    Anisotropic,
+}
+
+/// `principled`'s parameters (textured ones hold their textures' means).
+#[derive(Debug, Clone, PartialEq)]
+pub struct PrincipledDesc {
+    pub base_color: Rgb,
+    pub roughness: f32,
+    pub metallic: f32,
+    pub spec_trans: f32,
+    pub spec_tint: f32,
+    pub sheen: f32,
+    pub sheen_tint: f32,
+    pub flatness: f32,
+    pub clearcoat: f32,
+    pub clearcoat_gloss: f32,
+    /// In [0, 1]: the main lobes' roughness along the tangent over that
+    /// across it is `1/(1 − 0.9 anisotropic)`.
+    pub anisotropic: f32,
+    /// Interior over exterior index (from `eta`, or from `specular` by
+    /// `η = 2/(1 − √(0.08 specular)) − 1`).
+    pub eta: f32,
+    pub spec_rate: f32,
+    pub clearcoat_rate: f32,
+    pub diffuse_rate: f32,
+    /// `spec_trans` given (a texture, or a float other than 0).
+    pub has_spec_trans: bool,
+    /// `clearcoat` given (a texture, or a float other than 0).
+    pub has_clearcoat: bool,
 }
 
 /// A 2D texture, looked up at a surface point's texture coordinates after

@@ -2,7 +2,7 @@
 //! the problem sits in the XML, the line, column and tag:
 //!
 //! ```text
-//! scenes/cube.xml:31:9: <bsdf type="principled"> unknown BSDF type 'principled' (supported: diffuse, null, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided)
+//! scenes/cube.xml:31:9: <bsdf type="principledthin"> unknown BSDF type 'principledthin' (supported: diffuse, null, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided, mask, principled)
 //! ```
 //!
 //! Errors in a file that the scene references (a mesh, a `.vol` grid, an

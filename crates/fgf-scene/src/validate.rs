@@ -41,6 +41,10 @@ pub(crate) const NON_NEGATIVE: Range<f64> = Range {
     ok: |v| v.is_finite() && v >= 0.0,
     text: ">= 0",
 };
+pub(crate) const POSITIVE: Range<f64> = Range {
+    ok: |v| v.is_finite() && v > 0.0,
+    text: "> 0",
+};
 pub(crate) const MAX_DEPTH: Range<i64> = Range {
     ok: |v| v == -1 || (0..=i32::MAX as i64).contains(&v),
     text: "-1 (unbounded) or 0 <= max_depth <= 2^31-1",
@@ -478,6 +482,10 @@ pub(crate) fn film_too_large(w: i64, h: i64) -> String {
     )
 }
 
+/// The message of a `twosided` BSDF around a `mask`.
+pub(crate) const TWOSIDED_MASK: &str =
+    "twosided cannot hold a mask (it transmits; Mitsuba refuses it too): put the twosided BSDF inside the mask";
+
 fn check_bsdf(b: &BsdfDesc) -> Check {
     match b {
         BsdfDesc::Diffuse { reflectance } => range_rgb("reflectance", reflectance, UNIT),
@@ -503,10 +511,59 @@ fn check_bsdf(b: &BsdfDesc) -> Check {
             range_rgb("k", k, NON_NEGATIVE)?;
             range_rgb("specular_reflectance", specular_reflectance, UNIT)
         }
-        BsdfDesc::TwoSided(inner) => match **inner {
-            BsdfDesc::TwoSided(_) => fail(None, "twosided BSDFs cannot be nested"),
-            _ => check_bsdf(inner),
-        },
+        BsdfDesc::TwoSided(inner) => {
+            let mask = match &**inner {
+                BsdfDesc::Mask { .. } => true,
+                BsdfDesc::Textured { base, .. } => matches!(**base, BsdfDesc::Mask { .. }),
+                _ => false,
+            };
+            if matches!(**inner, BsdfDesc::TwoSided(_)) {
+                fail(None, "twosided BSDFs cannot be nested")
+            } else if mask {
+                fail(None, TWOSIDED_MASK)
+            } else if matches!(&**inner, BsdfDesc::Principled(d) if d.has_spec_trans)
+                || matches!(&**inner, BsdfDesc::Textured { base, .. } if matches!(&**base, BsdfDesc::Principled(d) if d.has_spec_trans))
+            {
+                fail(
+                    None,
+                    "twosided cannot hold a principled BSDF with spec_trans (it transmits; Mitsuba refuses it too)",
+                )
+            } else {
+                check_bsdf(inner)
+            }
+        }
+        BsdfDesc::Principled(d) => {
+            range_rgb("base_color", &d.base_color, UNIT)?;
+            for (name, v) in [
+                ("roughness", d.roughness),
+                ("metallic", d.metallic),
+                ("spec_trans", d.spec_trans),
+                ("spec_tint", d.spec_tint),
+                ("sheen", d.sheen),
+                ("sheen_tint", d.sheen_tint),
+                ("flatness", d.flatness),
+                ("clearcoat", d.clearcoat),
+                ("clearcoat_gloss", d.clearcoat_gloss),
+            ] {
+                range(name, v as f64, UNIT)?;
+            }
+            range("eta", d.eta as f64, IOR)?;
+            range("main_specular_sampling_rate", d.spec_rate as f64, POSITIVE)?;
+            range(
+                "clearcoat_sampling_rate",
+                d.clearcoat_rate as f64,
+                NON_NEGATIVE,
+            )?;
+            range(
+                "diffuse_reflectance_sampling_rate",
+                d.diffuse_rate as f64,
+                NON_NEGATIVE,
+            )
+        }
+        BsdfDesc::Mask { opacity, nested } => {
+            range("opacity", *opacity as f64, UNIT)?;
+            check_bsdf(nested)
+        }
         BsdfDesc::Textured { base, textures } => {
             check_bsdf(base)?;
             for (param, t) in textures {
@@ -608,6 +665,18 @@ pub(crate) fn textured_param_name(base: &BsdfDesc, p: TexturedParam) -> Option<&
         }
         (BsdfDesc::Conductor { .. } | BsdfDesc::RoughConductor { .. }, P::Eta) => "eta",
         (BsdfDesc::Conductor { .. } | BsdfDesc::RoughConductor { .. }, P::K) => "k",
+        (BsdfDesc::Mask { .. }, P::Opacity) => "opacity",
+        (BsdfDesc::Principled(_), P::BaseColor) => "base_color",
+        (BsdfDesc::Principled(_), P::Roughness) => "roughness",
+        (BsdfDesc::Principled(_), P::Metallic) => "metallic",
+        (BsdfDesc::Principled(_), P::SpecTrans) => "spec_trans",
+        (BsdfDesc::Principled(_), P::SpecTint) => "spec_tint",
+        (BsdfDesc::Principled(_), P::Sheen) => "sheen",
+        (BsdfDesc::Principled(_), P::SheenTint) => "sheen_tint",
+        (BsdfDesc::Principled(_), P::Flatness) => "flatness",
+        (BsdfDesc::Principled(_), P::Clearcoat) => "clearcoat",
+        (BsdfDesc::Principled(_), P::ClearcoatGloss) => "clearcoat_gloss",
+        (BsdfDesc::Principled(_), P::Anisotropic) => "anisotropic",
         _ => return None,
     })
 }

@@ -1046,9 +1046,9 @@ fn missing_scene_file_is_an_io_error() {
 #[test]
 fn unknown_plugin_lists_the_supported_ones() {
     has(
-        &err("<shape type=\"cube\">\n<bsdf type=\"principled\"/>\n</shape>"),
+        &err("<shape type=\"cube\">\n<bsdf type=\"principledthin\"/>\n</shape>"),
         &[
-            "test.xml:3:1: <bsdf type=\"principled\"> unknown BSDF type 'principled' (supported: diffuse, null, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided)",
+            "test.xml:3:1: <bsdf type=\"principledthin\"> unknown BSDF type 'principledthin' (supported: diffuse, null, dielectric, thindielectric, roughdielectric, conductor, roughconductor, plastic, roughplastic, twosided, mask, principled)",
         ],
     );
     has(

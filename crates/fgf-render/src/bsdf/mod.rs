@@ -13,6 +13,13 @@
 //! * `dielectric`: smooth, both sides; transmitted radiance is scaled by `(η_i/η_t)²` (Mitsuba's non-symmetric transport in radiance mode)
 //! * `conductor`: smooth, complex Fresnel per channel; one-sided
 //! * `twosided`: the nested BSDF on both sides
+//! * `principled` ([`principled`]): Mitsuba 3's Disney-style BSDF, its
+//!   formulas and lobe sampling reproduced step by step
+//! * `mask`: the nested BSDF with probability `opacity` (`u1 < opacity`
+//!   picks it, and `u1/opacity` is passed on), else a straight-through
+//!   sample flagged [`BsdfSample::null`]; value and pdf are the nested
+//!   ones times `opacity`, and [`Bsdf::null_transmission`] is what a
+//!   shadow ray keeps when crossing it (under `volpath`)
 //! * `thindielectric`: a thin slab: `R' = 2R/(1+R)` (all inter-reflections
 //!   of the two faces), the rest passes straight through; delta, both sides
 //! * `roughconductor`, `roughdielectric` ([`rough`]), `plastic`,
@@ -25,6 +32,7 @@
 pub mod fresnel;
 pub mod microfacet;
 pub mod plastic;
+pub mod principled;
 pub mod rough;
 #[cfg(test)]
 mod tests;
@@ -38,6 +46,7 @@ use fgf_scene::{BsdfDesc, MicrofacetDesc, MicrofacetKind, TexturedParam};
 use glam::{Vec2, Vec3};
 use microfacet::{Distribution, Microfacet};
 use plastic::{Plastic, RoughPlastic};
+use principled::Principled;
 use rough::{RoughConductor, RoughDielectric};
 use std::f32::consts::FRAC_1_PI;
 use std::sync::Arc;
@@ -71,6 +80,19 @@ pub enum BsdfKind {
     RoughDielectric(RoughDielectric),
     Plastic(Plastic),
     RoughPlastic(RoughPlastic),
+    Mask(Box<Mask>),
+    Principled(Principled),
+}
+
+/// `mask`: the nested BSDF with probability `opacity`, else a null
+/// interaction (straight through, weight 1).
+#[derive(Debug, Clone)]
+pub struct Mask {
+    pub opacity: f32,
+    pub nested: Bsdf,
+    /// `nested.is_smooth()`, kept so that [`Bsdf::is_smooth`] stays a
+    /// flat test.
+    pub smooth: bool,
 }
 
 /// The renderer's microfacet distribution of a description.
@@ -110,6 +132,10 @@ pub struct BsdfSample {
     pub delta: bool,
     /// Relative index of refraction crossed (1 for reflection), for Russian roulette.
     pub eta: f32,
+    /// A null interaction (Mitsuba's `BSDFFlags::Null`): the path went
+    /// straight through (a `thindielectric`'s transmission, a `mask`'s
+    /// transparent part).
+    pub null: bool,
 }
 
 impl Bsdf {
@@ -229,6 +255,43 @@ impl Bsdf {
                     textures: None,
                 }
             }
+            BsdfDesc::Principled(d) => Bsdf {
+                kind: BsdfKind::Principled(Principled {
+                    base_color: c(d.base_color),
+                    roughness: d.roughness,
+                    metallic: d.metallic,
+                    spec_trans: d.spec_trans,
+                    spec_tint: d.spec_tint,
+                    sheen: d.sheen,
+                    sheen_tint: d.sheen_tint,
+                    flatness: d.flatness,
+                    clearcoat: d.clearcoat,
+                    clearcoat_gloss: d.clearcoat_gloss,
+                    anisotropic: d.anisotropic,
+                    eta: d.eta,
+                    spec_rate: d.spec_rate,
+                    clearcoat_rate: d.clearcoat_rate,
+                    diffuse_rate: d.diffuse_rate,
+                    has_spec_trans: d.has_spec_trans,
+                    has_clearcoat: d.has_clearcoat,
+                }),
+                twosided: false,
+                textures: None,
+            },
+            BsdfDesc::Mask { opacity, nested } => {
+                let nested = Bsdf::from_desc(nested);
+                Bsdf {
+                    // A textured nested BSDF makes the mask textured too
+                    // (`at` then makes the nested one concrete).
+                    textures: nested.textures.as_ref().map(|_| Arc::from([])),
+                    kind: BsdfKind::Mask(Box::new(Mask {
+                        opacity: *opacity,
+                        smooth: nested.is_smooth(),
+                        nested,
+                    })),
+                    twosided: false,
+                }
+            }
             BsdfDesc::TwoSided(inner) => Bsdf {
                 twosided: true,
                 ..Bsdf::from_desc(inner)
@@ -292,8 +355,25 @@ impl Bsdf {
                 (P::AlphaU, BsdfKind::RoughDielectric(c)) => c.distr.ax = tex.eval_1(uv),
                 (P::AlphaV, BsdfKind::RoughConductor(c)) => c.distr.ay = tex.eval_1(uv),
                 (P::AlphaV, BsdfKind::RoughDielectric(c)) => c.distr.ay = tex.eval_1(uv),
+                (P::Opacity, BsdfKind::Mask(m)) => m.opacity = tex.eval_1(uv).clamp(0.0, 1.0),
+                (P::BaseColor, BsdfKind::Principled(b)) => b.base_color = tex.eval(uv),
+                (P::Roughness, BsdfKind::Principled(b)) => b.roughness = tex.eval_1(uv),
+                (P::Metallic, BsdfKind::Principled(b)) => b.metallic = tex.eval_1(uv),
+                (P::SpecTrans, BsdfKind::Principled(b)) => b.spec_trans = tex.eval_1(uv),
+                (P::SpecTint, BsdfKind::Principled(b)) => b.spec_tint = tex.eval_1(uv),
+                (P::Sheen, BsdfKind::Principled(b)) => b.sheen = tex.eval_1(uv),
+                (P::SheenTint, BsdfKind::Principled(b)) => b.sheen_tint = tex.eval_1(uv),
+                (P::Flatness, BsdfKind::Principled(b)) => b.flatness = tex.eval_1(uv),
+                (P::Clearcoat, BsdfKind::Principled(b)) => b.clearcoat = tex.eval_1(uv),
+                (P::ClearcoatGloss, BsdfKind::Principled(b)) => b.clearcoat_gloss = tex.eval_1(uv),
+                (P::Anisotropic, BsdfKind::Principled(b)) => b.anisotropic = tex.eval_1(uv),
                 // The validator refuses other pairs.
                 _ => {}
+            }
+        }
+        if let BsdfKind::Mask(m) = &mut b.kind {
+            if m.nested.textures.is_some() {
+                m.nested = m.nested.at(uv);
             }
         }
         b
@@ -308,6 +388,7 @@ impl Bsdf {
             BsdfKind::Diffuse { .. } => false,
             BsdfKind::RoughConductor(b) => b.distr.ax != b.distr.ay,
             BsdfKind::RoughDielectric(b) => b.distr.ax != b.distr.ay,
+            BsdfKind::Principled(b) => b.anisotropic > 0.0,
             _ => false,
         }
     }
@@ -317,26 +398,50 @@ impl Bsdf {
         matches!(self.kind, BsdfKind::Null)
     }
 
-    /// `thindielectric`: its transmission leaves the direction unchanged, so
-    /// under `volpath` the path tracer counts it as an index-matched crossing
-    /// (no depth), as Mitsuba 3's volpath counts its `Null` lobe
+    /// True if the BSDF has a null lobe besides its others (see
+    /// [`BsdfSample::null`]): `thindielectric`, `mask`. Under `volpath`
+    /// the path tracer counts a sample of it as an index-matched crossing
+    /// (no depth), as Mitsuba 3's volpath counts a `Null` lobe
     /// ([`crate::World::thin_is_crossing`]).
     #[inline]
-    pub fn is_thin(&self) -> bool {
-        matches!(self.kind, BsdfKind::ThinDielectric { .. })
+    pub fn has_null_lobe(&self) -> bool {
+        matches!(
+            self.kind,
+            BsdfKind::ThinDielectric { .. } | BsdfKind::Mask(_)
+        )
+    }
+
+    /// The weight with which a shadow ray arriving along `wi` (local frame)
+    /// passes straight through (Mitsuba's `eval_null_transmission`): 1 for
+    /// `null`, `(1 − R')·T` for `thindielectric`, `1 − opacity·(1 − nested)`
+    /// for `mask`, 0 for the others.
+    pub fn null_transmission(&self, wi: Vec3) -> Spectrum {
+        match &self.kind {
+            BsdfKind::Null => Spectrum::ONE,
+            &BsdfKind::ThinDielectric { eta, t, .. } => {
+                let f = fresnel_dielectric(wi.z.abs(), eta).r;
+                t * (1.0 - 2.0 * f / (1.0 + f))
+            }
+            BsdfKind::Mask(m) => {
+                Spectrum::ONE - m.opacity * (Spectrum::ONE - m.nested.null_transmission(wi))
+            }
+            _ => Spectrum::ZERO,
+        }
     }
 
     /// True if the BSDF has a non-delta lobe, so light sampling helps.
     #[inline]
     pub fn is_smooth(&self) -> bool {
-        matches!(
-            self.kind,
+        match &self.kind {
             BsdfKind::Diffuse { .. }
-                | BsdfKind::RoughConductor(_)
-                | BsdfKind::RoughDielectric(_)
-                | BsdfKind::Plastic(_)
-                | BsdfKind::RoughPlastic(_)
-        )
+            | BsdfKind::RoughConductor(_)
+            | BsdfKind::RoughDielectric(_)
+            | BsdfKind::Plastic(_)
+            | BsdfKind::RoughPlastic(_)
+            | BsdfKind::Principled(_) => true,
+            BsdfKind::Mask(m) => m.smooth,
+            _ => false,
+        }
     }
 
     /// `f(wi, wo)·|wo.z|` and the pdf of sampling `wo` (zero for delta lobes).
@@ -368,6 +473,11 @@ impl Bsdf {
             BsdfKind::RoughDielectric(b) => b.eval_pdf(wi, wo),
             BsdfKind::Plastic(b) => b.eval_pdf(wi, wo),
             BsdfKind::RoughPlastic(b) => b.eval_pdf(wi, wo),
+            BsdfKind::Principled(b) => b.eval_pdf(wi, wo),
+            BsdfKind::Mask(m) => {
+                let (f, pdf) = m.nested.eval_pdf(wi, wo);
+                (f * m.opacity, pdf * m.opacity)
+            }
             _ => (Spectrum::ZERO, 0.0),
         }
     }
@@ -393,6 +503,7 @@ impl Bsdf {
                     pdf: cosine_hemisphere_pdf(wo.z),
                     delta: false,
                     eta: 1.0,
+                    null: false,
                 }
             }
             BsdfKind::Null => BsdfSample {
@@ -401,6 +512,7 @@ impl Bsdf {
                 pdf: 1.0,
                 delta: true,
                 eta: 1.0,
+                null: true,
             },
             &BsdfKind::Dielectric { eta, r, t } => {
                 let f = fresnel_dielectric(wi.z, eta);
@@ -411,6 +523,7 @@ impl Bsdf {
                         pdf: f.r,
                         delta: true,
                         eta: 1.0,
+                        null: false,
                     }
                 } else {
                     // Refracted direction: tangential part scaled by η_i/η_t.
@@ -423,6 +536,7 @@ impl Bsdf {
                         pdf: 1.0 - f.r,
                         delta: true,
                         eta: f.eta_it,
+                        null: false,
                     }
                 }
             }
@@ -437,6 +551,7 @@ impl Bsdf {
                         pdf: rr,
                         delta: true,
                         eta: 1.0,
+                        null: false,
                     }
                 } else {
                     BsdfSample {
@@ -445,6 +560,7 @@ impl Bsdf {
                         pdf: 1.0 - rr,
                         delta: true,
                         eta: 1.0,
+                        null: true,
                     }
                 }
             }
@@ -452,6 +568,23 @@ impl Bsdf {
             BsdfKind::RoughDielectric(b) => b.sample(wi, u1, u2)?,
             BsdfKind::Plastic(b) => b.sample(wi, u1, u2)?,
             BsdfKind::RoughPlastic(b) => b.sample(wi, u1, u2)?,
+            BsdfKind::Principled(b) => b.sample(wi, u1, u2)?,
+            BsdfKind::Mask(m) => {
+                if u1 < m.opacity {
+                    let mut s = m.nested.sample(wi, u1 / m.opacity, u2)?;
+                    s.pdf *= m.opacity;
+                    s
+                } else {
+                    BsdfSample {
+                        wo: -wi,
+                        weight: Spectrum::ONE,
+                        pdf: 1.0 - m.opacity,
+                        delta: true,
+                        eta: 1.0,
+                        null: true,
+                    }
+                }
+            }
             &BsdfKind::Conductor { eta, k, r, mirror } => {
                 if wi.z <= 0.0 {
                     return None;
@@ -471,6 +604,7 @@ impl Bsdf {
                     pdf: 1.0,
                     delta: true,
                     eta: 1.0,
+                    null: false,
                 }
             }
         };

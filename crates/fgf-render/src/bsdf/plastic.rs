@@ -135,6 +135,7 @@ impl Plastic {
                 pdf: ps,
                 delta: true,
                 eta: 1.0,
+                null: false,
             });
         }
         let wo = sample_cosine_hemisphere(u);
@@ -151,6 +152,7 @@ impl Plastic {
             pdf: pd * cosine_hemisphere_pdf(wo.z),
             delta: false,
             eta: 1.0,
+            null: false,
         })
     }
 }
@@ -378,6 +380,7 @@ impl RoughPlastic {
             pdf,
             delta: false,
             eta: 1.0,
+            null: false,
         })
     }
 }

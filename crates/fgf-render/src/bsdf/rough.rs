@@ -68,6 +68,7 @@ impl RoughConductor {
             pdf,
             delta: false,
             eta: 1.0,
+            null: false,
         })
     }
 }
@@ -161,6 +162,7 @@ impl RoughDielectric {
             pdf,
             delta: false,
             eta: eta_crossed,
+            null: false,
         })
     }
 }

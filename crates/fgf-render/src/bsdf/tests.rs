@@ -372,3 +372,69 @@ fn diffuse_reflectance_fit_is_close_to_exact() {
         );
     }
 }
+
+/// `mask`: value and pdf are the nested ones times `opacity`; sampling
+/// goes straight through with probability `1 − opacity` (weight 1, flagged
+/// null) and otherwise samples the nested BSDF; a shadow ray keeps
+/// `1 − opacity`, and `1 − opacity·(1 − T')` around a thin dielectric.
+#[test]
+fn mask_scales_the_nested_bsdf() {
+    let diffuse = Bsdf::from_desc(&fgf_scene::BsdfDesc::Diffuse {
+        reflectance: [0.6, 0.3, 0.2],
+    });
+    let m = Bsdf::from_desc(&fgf_scene::BsdfDesc::Mask {
+        opacity: 0.3,
+        nested: Box::new(fgf_scene::BsdfDesc::Diffuse {
+            reflectance: [0.6, 0.3, 0.2],
+        }),
+    });
+    assert!(m.is_smooth() && m.has_null_lobe() && !m.is_null());
+    let wi = Vec3::new(0.6, 0.0, 0.8);
+    let wo = Vec3::new(-0.3, 0.4, (1.0f32 - 0.25).sqrt());
+    let (f, p) = m.eval_pdf(wi, wo);
+    let (fd, pd) = diffuse.eval_pdf(wi, wo);
+    assert!((f - 0.3 * fd).abs().max_element() < 1e-7 && (p - 0.3 * pd).abs() < 1e-7);
+    let n = 10_000;
+    let mut nulls = 0;
+    for i in 0..n {
+        let u1 = (i as f32 + 0.5) / n as f32;
+        let s = m.sample(wi, u1, [0.37, 0.61]).unwrap();
+        if s.null {
+            nulls += 1;
+            assert_eq!(s.wo, -wi);
+            assert_eq!(s.weight, Spectrum::ONE);
+            assert!((s.pdf - 0.7).abs() < 1e-6);
+        } else {
+            // The nested sample's weight, its pdf times the opacity.
+            let (f, p) = m.eval_pdf(wi, s.wo);
+            assert!((s.pdf - p).abs() < 1e-5 * p && (s.weight - f / p).abs().max_element() < 1e-5);
+        }
+    }
+    assert_eq!(nulls, 7000);
+    assert!(
+        (m.null_transmission(wi) - Spectrum::splat(0.7))
+            .abs()
+            .max_element()
+            < 1e-7
+    );
+    let thin = fgf_scene::BsdfDesc::ThinDielectric {
+        int_ior: 1.5,
+        ext_ior: 1.0,
+        specular_reflectance: [1.0; 3],
+        specular_transmittance: [1.0; 3],
+    };
+    let t = Bsdf::from_desc(&thin).null_transmission(wi);
+    let r = fresnel_dielectric(0.8, 1.5).r;
+    assert!(
+        (t - Spectrum::splat(1.0 - 2.0 * r / (1.0 + r)))
+            .abs()
+            .max_element()
+            < 1e-6
+    );
+    let mt = Bsdf::from_desc(&fgf_scene::BsdfDesc::Mask {
+        opacity: 0.3,
+        nested: Box::new(thin),
+    });
+    let exp = Spectrum::ONE - 0.3 * (Spectrum::ONE - t);
+    assert!((mt.null_transmission(wi) - exp).abs().max_element() < 1e-6);
+}

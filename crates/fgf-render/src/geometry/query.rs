@@ -7,7 +7,7 @@ use super::pack::splat_ray;
 use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
 use crate::ray::Ray;
-use glam::{Vec3, Vec4};
+use glam::{Vec3, Vec3A, Vec4};
 
 impl Geometry {
     /// World bounds of all surfaces.
@@ -179,6 +179,26 @@ impl Geometry {
                 }
             }
         }
+    }
+
+    /// The [`Hit`] of primitive `prim` (as [`Self::for_each_hit`] names it)
+    /// at distance `t` along `ray`, its barycentrics recovered from the
+    /// point: for the few crossings a shadow ray must look at closely (the
+    /// texture coordinates of a `mask`).
+    pub(crate) fn hit_at(&self, ray: &Ray, prim: u32, t: f32) -> Hit {
+        let (mut u, mut v) = (0.0, 0.0);
+        if prim >> KIND_SHIFT == KIND_TRI {
+            let tri = &self.tris[(prim & INDEX_MASK) as usize];
+            let w = Vec3A::from(ray.at(t)) - tri.v0;
+            let (d00, d01, d11) = (tri.e1.dot(tri.e1), tri.e1.dot(tri.e2), tri.e2.dot(tri.e2));
+            let (d20, d21) = (w.dot(tri.e1), w.dot(tri.e2));
+            let det = d00 * d11 - d01 * d01;
+            if det > 0.0 {
+                u = (d11 * d20 - d01 * d21) / det;
+                v = (d00 * d21 - d01 * d20) / det;
+            }
+        }
+        self.make_hit(ray, HitRecord((prim, t, u, v)))
     }
 
     /// Every crossing of the segment `o + t d`, `0 < t < t_max`, with a

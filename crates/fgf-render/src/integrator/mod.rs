@@ -15,7 +15,8 @@
 //!   importance sampling (power heuristic). Emitters hit by a path after a
 //!   delta surface (or directly from the camera) count fully.
 //! * Shadow rays pass through `null` boundaries and media (transmittance
-//!   estimates); any other surface blocks them.
+//!   estimates) and, under `volpath`, through `mask` and `thindielectric`
+//!   surfaces with their null transmission; any other surface blocks them.
 //! * Russian roulette once the depth exceeds `rr_depth`: survival probability
 //!   `min(max(throughput)·η², 0.95)`.
 //! * `direct` (Mitsuba's direct-illumination integrator) is a separate
@@ -232,15 +233,15 @@ impl World {
             let bsdf = &*bsdf;
             // This interaction would be event number depth + 1: nothing it
             // leads to can contribute unless depth + 1 < max_depth.
-            // A thin dielectric's transmission may not count (see below),
-            // so its sample is drawn first and the test made after it.
-            let thin_crossings = self.thin_is_crossing && bsdf.is_thin();
-            if depth + 1 >= self.max_depth && !thin_crossings {
+            // A null-lobe sample may not count (see below), so its sample
+            // is drawn first and the test made after it.
+            let null_crossings = self.thin_is_crossing && bsdf.has_null_lobe();
+            if depth + 1 >= self.max_depth && !null_crossings {
                 break;
             }
             let frame = self.frame_at(bsdf, &h);
             let wi_local = frame.to_local(-ray.d);
-            if bsdf.is_smooth() {
+            if bsdf.is_smooth() && depth + 1 < self.max_depth {
                 // Next-event estimation from the surface.
                 let vertex = SurfaceVertex {
                     hit: &h,
@@ -257,11 +258,14 @@ impl World {
             let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
                 break;
             };
-            // Transmission through a thin dielectric keeps the direction:
-            // under volpath an index-matched crossing, not a scattering
-            // event (Mitsuba's volpath gives it no depth either); under
-            // path a bounce, as in Mitsuba's path.
-            let crossing = thin_crossings && bs.wo.z * wi_local.z < 0.0;
+            // A null-lobe sample (thin dielectric transmission, a mask's
+            // transparent part) keeps the direction: under volpath an
+            // index-matched crossing, not a scattering event (Mitsuba's
+            // volpath gives it no depth, and emission found beyond it is
+            // weighted against light sampling from the vertex before, whose
+            // shadow rays pass the surface); under path a bounce, as in
+            // Mitsuba's path.
+            let crossing = null_crossings && bs.null;
             if !crossing && depth + 1 >= self.max_depth {
                 break;
             }
@@ -270,10 +274,10 @@ impl World {
             eta *= bs.eta;
             if !crossing {
                 depth += 1;
+                specular = bs.delta;
+                prev_pdf = bs.pdf;
+                prev_p = h.p;
             }
-            specular = bs.delta;
-            prev_pdf = bs.pdf;
-            prev_p = h.p;
             medium = info.target_medium(h.n, wo, medium);
             ray = Ray {
                 o: offset_point(h.p, h.n, wo),

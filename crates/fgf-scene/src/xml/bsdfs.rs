@@ -4,7 +4,12 @@
 //! reflects and passes straight through), `roughdielectric`, `conductor` (a
 //! smooth metal), `roughconductor`, `plastic` (a diffuse base under a
 //! dielectric coating, Mitsuba 3's model), `roughplastic` (the same under a
-//! rough coating) and `twosided` (the nested BSDF on both sides). The rough plugins use a microfacet
+//! rough coating), `twosided` (the nested BSDF on both sides), `mask`
+//! (the nested BSDF where the surface is opaque, a straight-through
+//! crossing elsewhere: cut-out leaves, fences) and `principled` (Mitsuba 3's
+//! Disney-style BSDF: diffuse with retro-reflection and sheen, a GGX
+//! specular lobe blending dielectric and metal, rough transmission and a
+//! clearcoat; formulas in `crates/fgf-render/src/bsdf/principled.rs`). The rough plugins use a microfacet
 //! distribution (Walter et al. 2007) sampled through its visible normals
 //! (Heitz 2018) unless `sample_visible` is false. A colour parameter, and
 //! a rough plugin's `alpha` (`alpha_u`, `alpha_v`), may be a `checkerboard` or `bitmap` texture
@@ -12,7 +17,7 @@
 //! Anisotropic roughness follows Mitsuba's shading frame: `alpha_u` along
 //! the surface tangent `∂p/∂u` (each shape's parameterisation, see
 //! `fgf_render::geometry::frame`), `alpha_v` across it.
-//! `mask` and `principled` are refused with a message naming them. A `<bsdf>` at the top level
+//! `principled`'s `anisotropic` uses the same frame. `principledthin` is refused with a message naming it. A `<bsdf>` at the top level
 //! with an `id` can be shared by `<ref id="..."/>`. The default BSDF of a
 //! shape is described in [`super::shapes`].
 //!
@@ -35,7 +40,21 @@
 //! | `plastic`, `roughplastic` | `diffuse_reflectance` | float, rgb or texture | – | in [0, 1] | 0.5 | the base |
 //! | `plastic`, `roughplastic` | `specular_reflectance` | float, rgb or texture | – | in [0, 1] | 1 | scales the coating's reflection |
 //! | `plastic`, `roughplastic` | `nonlinear` | boolean | – | – | false | account for the colour shift of internal scattering (`ρ/(1 - ρ F_int)` instead of `ρ/(1 - F_int)`) |
-//! | `twosided` | nested `bsdf` | – | – | one, not `twosided` | required | |
+//! | `twosided` | nested `bsdf` | – | – | one, not `twosided` or `mask` | required | |
+//! | `mask` | `opacity` | float or texture | – | in [0, 1] | 0.5 | the probability that a path scatters off the nested BSDF; otherwise it goes straight through (a `Null` interaction: under `volpath`/`volpathmis` it costs no depth and shadow rays pass with weight `1 − opacity`; under `path` a bounce, and shadow rays stop there, as in Mitsuba). A texture is read as a textured `alpha` ([`super::textures`]) |
+//! | `mask` | nested `bsdf` | – | – | one (a `twosided` one for a surface seen from both sides) | required | |
+//! | `principled` | `base_color` | float, rgb or texture | – | in [0, 1] | 0.5 | the diffuse colour, the metal's reflectance at normal incidence, the tint of `spec_tint`/`sheen_tint` and (as `√base_color`) of the transmission |
+//! | `principled` | `roughness` | float or texture | – | in [0, 1] | 0.5 | GGX `α = max(0.001, roughness²)` of the main lobes (see `anisotropic`); also scales the diffuse retro-reflection |
+//! | `principled` | `metallic` | float or texture | – | in [0, 1] | 0 | blends toward a Schlick metal of reflectance `base_color` (no diffuse, sheen or transmission) |
+//! | `principled` | `spec_trans` | float or texture | – | in [0, 1] | 0 | weight of the rough (GGX) transmission through an interface of index `eta`; with it, the surface transmits (not inside `twosided`) |
+//! | `principled` | `eta` | float | – | > 0 (1 becomes 1.001 when `spec_trans` is given) | from `specular` | interior over exterior index of refraction; not together with `specular` |
+//! | `principled` | `specular` | float | – | in [0, 1] (0 becomes 1e-3 when `spec_trans` is given) | 0.5 | sets `eta = 2/(1 − √(0.08·specular)) − 1` (0.5: 1.5) |
+//! | `principled` | `spec_tint` | float or texture | – | in [0, 1] | 0 | tints the dielectric reflection toward `base_color` |
+//! | `principled` | `sheen`, `sheen_tint` | float or texture | – | in [0, 1] | 0, 0 | grazing-angle sheen, and its tint toward `base_color` |
+//! | `principled` | `flatness` | float or texture | – | in [0, 1] | 0 | blends the diffuse lobe toward the "fake subsurface" one |
+//! | `principled` | `clearcoat`, `clearcoat_gloss` | float or texture | – | in [0, 1] | 0, 0 | a second, GTR1 reflection lobe (roughness from 0.1 at gloss 0 to 0.001 at gloss 1) |
+//! | `principled` | `anisotropic` | float or texture | – | in [0, 1] | 0 | stretches the GGX lobes along the surface tangent `∂p/∂u`: `α_u = max(0.001, roughness²/a)`, `α_v = max(0.001, roughness²·a)` with `a = √(1 − 0.9·anisotropic)`, in Mitsuba's shading frame (as `alpha_u`/`alpha_v`) |
+//! | `principled` | `main_specular_sampling_rate`, `clearcoat_sampling_rate`, `diffuse_reflectance_sampling_rate` | float | – | > 0, ≥ 0, ≥ 0 | 1, 1, 1 | relative rates at which sampling picks the main GGX lobes, the clearcoat and the diffuse lobe (they change the noise, not the image) |
 //!
 //! ```xml
 //! <bsdf type="twosided" id="gold">
@@ -59,6 +78,22 @@
 //!         <float name="alpha_v" value="0.3"/>
 //!     </bsdf>
 //! </shape>
+//! <shape type="rectangle">
+//!     <bsdf type="mask">
+//!         <texture type="bitmap" name="opacity">
+//!             <string name="filename" value="textures/leaf-alpha.png"/>
+//!         </texture>
+//!         <bsdf type="twosided"><bsdf type="diffuse"/></bsdf>
+//!     </bsdf>
+//! </shape>
+//! <shape type="sphere">
+//!     <bsdf type="principled">
+//!         <rgb name="base_color" value="0.9, 0.6, 0.2"/>
+//!         <float name="metallic" value="0.8"/>
+//!         <float name="roughness" value="0.3"/>
+//!         <float name="clearcoat" value="0.5"/>
+//!     </bsdf>
+//! </shape>
 //! <default name="albedo" value="0.2, 0.25, 0.7"/>
 //! ```
 //!
@@ -74,7 +109,7 @@ use super::tables;
 use super::textures::{self, ColorOrTexture};
 use crate::desc::*;
 use crate::error::SceneError;
-use crate::validate::{ALPHA, IOR, NON_NEGATIVE, UNIT};
+use crate::validate::{ALPHA, IOR, NON_NEGATIVE, POSITIVE, UNIT};
 
 /// The BSDF of a shape without one, as Mitsuba 3.9's `Shape` constructor
 /// chooses it: a diffuse BSDF of reflectance 0.5, except on a shape with an
@@ -106,6 +141,8 @@ const BSDFS: &[&str] = &[
     "plastic",
     "roughplastic",
     "twosided",
+    "mask",
+    "principled",
 ];
 
 /// `distribution`, `alpha` or `alpha_u`/`alpha_v`, `sample_visible`, with
@@ -181,6 +218,121 @@ fn microfacet_desc<'a>(
         alpha_u: alpha_u as f32,
         alpha_v: alpha_v as f32,
         sample_visible: p.bool_or("sample_visible", true)?,
+    })
+}
+
+/// A scalar parameter of `principled`: a float in [0, 1] or a texture
+/// (read by `eval_1`), with whether it was given as Mitsuba's
+/// `get_flag` says (a texture, or a float other than 0).
+fn principled_scalar<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    name: &str,
+    default: f32,
+    param: TexturedParam,
+    tex: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<(f32, bool), SceneError> {
+    if p.peek(name).is_some_and(|e| e.target.tag == "texture") {
+        return Ok(
+            match textures::color_or_texture(ctx, p, name, [default as f64; 3], UNIT)? {
+                ColorOrTexture::Texture(t) => {
+                    let m = t.mean().clamp(0.0, 1.0);
+                    tex.push((param, t));
+                    (m, true)
+                }
+                ColorOrTexture::Color(c) => (c[0] as f32, c[0] != 0.0),
+            },
+        );
+    }
+    Ok(match p.float(name)? {
+        Some((v, node)) => {
+            let v = check(node, name, v, UNIT)?;
+            (v as f32, v != 0.0)
+        }
+        None => (default, false),
+    })
+}
+
+/// `principled`'s parameters, with Mitsuba 3.9.1's defaults and its
+/// adjustments of `eta` (1 becomes 1.001, and `specular` 0 becomes 1e-3,
+/// when `spec_trans` is given).
+fn principled_desc<'a>(
+    ctx: &mut Ctx<'a>,
+    p: &Props<'a>,
+    tex: &mut Vec<(TexturedParam, TextureDesc)>,
+) -> Result<PrincipledDesc, SceneError> {
+    use TexturedParam as T;
+    let base_color = match textures::color_or_texture(ctx, p, "base_color", [0.5; 3], UNIT)? {
+        ColorOrTexture::Color(c) => rgb(c),
+        ColorOrTexture::Texture(t) => {
+            let m = t.mean();
+            tex.push((T::BaseColor, t));
+            [m; 3]
+        }
+    };
+    let mut s = |name, default, param| principled_scalar(ctx, p, name, default, param, tex);
+    let (roughness, _) = s("roughness", 0.5, T::Roughness)?;
+    let (metallic, _) = s("metallic", 0.0, T::Metallic)?;
+    let (spec_trans, has_spec_trans) = s("spec_trans", 0.0, T::SpecTrans)?;
+    let (spec_tint, _) = s("spec_tint", 0.0, T::SpecTint)?;
+    let (sheen, _) = s("sheen", 0.0, T::Sheen)?;
+    let (sheen_tint, _) = s("sheen_tint", 0.0, T::SheenTint)?;
+    let (flatness, _) = s("flatness", 0.0, T::Flatness)?;
+    let (clearcoat, has_clearcoat) = s("clearcoat", 0.0, T::Clearcoat)?;
+    let (clearcoat_gloss, _) = s("clearcoat_gloss", 0.0, T::ClearcoatGloss)?;
+    let (anisotropic, _) = s("anisotropic", 0.0, T::Anisotropic)?;
+    let eta = match (p.float("eta")?, p.float("specular")?) {
+        (Some(_), Some((_, node))) => {
+            return Err(node.err("principled: give either 'eta' or 'specular', not both"))
+        }
+        (Some((v, node)), None) => {
+            let v = check(node, "eta", v, IOR)? as f32;
+            if has_spec_trans && v == 1.0 {
+                1.001
+            } else {
+                v
+            }
+        }
+        (None, sp) => {
+            let mut v = match sp {
+                Some((v, node)) => check(node, "specular", v, UNIT)? as f32,
+                None => 0.5,
+            };
+            if has_spec_trans && v == 0.0 {
+                v = 1e-3;
+            }
+            2.0 / (1.0 - (0.08 * v).sqrt()) - 1.0
+        }
+    };
+    let rate = |name: &str, positive: bool| -> Result<f32, SceneError> {
+        Ok(match p.float(name)? {
+            None => 1.0,
+            Some((v, node)) => check(
+                node,
+                name,
+                v,
+                if positive { POSITIVE } else { NON_NEGATIVE },
+            )? as f32,
+        })
+    };
+    Ok(PrincipledDesc {
+        base_color,
+        roughness,
+        metallic,
+        spec_trans,
+        spec_tint,
+        sheen,
+        sheen_tint,
+        flatness,
+        clearcoat,
+        clearcoat_gloss,
+        anisotropic,
+        eta,
+        spec_rate: rate("main_specular_sampling_rate", true)?,
+        clearcoat_rate: rate("clearcoat_sampling_rate", false)?,
+        diffuse_rate: rate("diffuse_reflectance_sampling_rate", false)?,
+        has_spec_trans,
+        has_clearcoat,
     })
 }
 
@@ -351,6 +503,25 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             "sample_visible",
         ],
         "conductor" => &["material", "eta", "k", "specular_reflectance"],
+        "mask" => &["opacity"],
+        "principled" => &[
+            "base_color",
+            "roughness",
+            "metallic",
+            "spec_trans",
+            "spec_tint",
+            "sheen",
+            "sheen_tint",
+            "flatness",
+            "clearcoat",
+            "clearcoat_gloss",
+            "anisotropic",
+            "eta",
+            "specular",
+            "main_specular_sampling_rate",
+            "clearcoat_sampling_rate",
+            "diffuse_reflectance_sampling_rate",
+        ],
         "roughconductor" => &[
             "material",
             "eta",
@@ -505,6 +676,44 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                 },
             }
         }
+        "principled" => BsdfDesc::Principled(principled_desc(ctx, &p, &mut tex)?),
+        "mask" => {
+            let opacity = match p.peek("opacity").filter(|e| e.target.tag == "texture") {
+                Some(_) => match textures::color_or_texture(ctx, &p, "opacity", [0.5; 3], UNIT)? {
+                    ColorOrTexture::Texture(t) => {
+                        let mean = t.mean().clamp(0.0, 1.0);
+                        tex.push((T::Opacity, t));
+                        mean
+                    }
+                    ColorOrTexture::Color(c) => c[0] as f32,
+                },
+                None => match p.float("opacity")? {
+                    Some((v, node)) => check(node, "opacity", v, UNIT)? as f32,
+                    None => 0.5,
+                },
+            };
+            let nested = p.take_objects("bsdf");
+            match nested.len() {
+                1 => {}
+                0 => return Err(n.err("mask needs one nested BSDF")),
+                _ => return Err(nested[1].node.err("mask takes one nested BSDF")),
+            }
+            if depth > 4 {
+                return Err(n.err("BSDFs nested too deep"));
+            }
+            let pushed = n
+                .attr("id")
+                .map(|id| ctx.resolving.push(id.to_string()))
+                .is_some();
+            let inner = bsdf_desc(ctx, nested[0].target, depth + 1);
+            if pushed {
+                ctx.resolving.pop();
+            }
+            BsdfDesc::Mask {
+                opacity,
+                nested: Box::new(inner?),
+            }
+        }
         _ => {
             let nested = p.take_objects("bsdf");
             match nested.len() {
@@ -519,6 +728,9 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             let target = nested[0].target;
             if target.attr("type") == Some("twosided") {
                 return Err(nested[0].node.err("twosided BSDFs cannot be nested"));
+            }
+            if target.attr("type") == Some("mask") {
+                return Err(nested[0].node.err(crate::validate::TWOSIDED_MASK));
             }
             if depth > 4 {
                 return Err(n.err("BSDFs nested too deep"));

@@ -18,11 +18,11 @@
 //! `reflectance`; `specular_reflectance` of `dielectric`, `thindielectric`,
 //! `roughdielectric`, `conductor`, `roughconductor` and `plastic`;
 //! `specular_transmittance` of the dielectrics; `plastic`'s
-//! `diffuse_reflectance`; `eta` and `k` of `conductor` and
+//! `diffuse_reflectance`; `mask`'s `opacity`; `eta` and `k` of `conductor` and
 //! `roughconductor` (values ≥ 0; the Fresnel term per channel of the
 //! texture's value at the hit; Mitsuba 3.9.1 itself refuses checkerboard
 //! colours above 1 there, as it reads them as reflectances); and `alpha`, `alpha_u`, `alpha_v` of
-//! `roughconductor` and `roughdielectric` (the roughness is then the mean of
+//! `roughconductor` and `roughdielectric` (the roughness, or opacity, is then the mean of
 //! a checkerboard colour's channels — of `color1` where the colour would be
 //! `color0`, as Mitsuba 3.9.1 does — or the luminance of a bitmap's value;
 //! the whole texture must lie in the `alpha` range). Values must lie in the
