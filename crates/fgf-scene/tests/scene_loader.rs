@@ -201,7 +201,7 @@ fn reference_heterogeneous_scene_loads_its_grid() {
             assert_eq!(g.grid.shape, [64, 64, 64]);
             assert_eq!(g.grid.channels, 1);
             assert_eq!(g.filter, GridFilter::Trilinear);
-            assert!(!g.use_grid_bbox && g.wrap_clamp);
+            assert!(!g.use_grid_bbox && g.wrap == fgf_scene::WrapMode::Clamp);
             let mean =
                 g.grid.data.iter().map(|&v| v as f64).sum::<f64>() / g.grid.data.len() as f64;
             assert!(
