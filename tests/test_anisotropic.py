@@ -14,22 +14,17 @@
 
 from __future__ import annotations
 
-from pathlib import Path
 
 import numpy as np
 import pytest
 
 import fgf
-from test_render_mitsuba import K, assert_agree
+from test_materials import _mitsuba, mitsuba_eval_pdf, render_fgf, render_mitsuba
+from test_render_mitsuba import assert_agree
 
 SPP = 64
 
 
-def _mitsuba():
-    import mitsuba as mi
-
-    mi.set_variant("scalar_rgb")
-    return mi
 
 
 # A quad of two triangles with texture coordinates that rotate and shear
@@ -212,22 +207,6 @@ def _pairs(n: int, seed: int, dielectric: bool) -> tuple[np.ndarray, np.ndarray]
     return wi[ok].astype(np.float32), wo[ok].astype(np.float32)
 
 
-def _mitsuba_eval_pdf(params: dict, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    mi = _mitsuba()
-    b = mi.load_dict(params)
-    ctx = mi.BSDFContext()
-    f, pdf = [], []
-    for a, o in zip(wi, wo):
-        si = mi.SurfaceInteraction3f()
-        si.n = mi.Normal3f(0, 0, 1)
-        si.sh_frame = mi.Frame3f(si.n)
-        si.wi = mi.Vector3f(*map(float, a))
-        v = mi.Vector3f(*map(float, o))
-        f.append(np.array(b.eval(ctx, si, v)))
-        pdf.append(float(b.pdf(ctx, si, v)))
-    return np.array(f), np.array(pdf)
-
-
 @pytest.mark.parametrize("name", sorted(BSDFS))
 def test_anisotropic_eval_and_pdf_match_mitsuba(tmp_path, name):
     """Value and pdf at 600 direction pairs against Mitsuba's. The values
@@ -244,7 +223,7 @@ def test_anisotropic_eval_and_pdf_match_mitsuba(tmp_path, name):
     scene.write_text('<scene version="3.0.0"><shape type="sphere">' + _xml(params) + "</shape></scene>")
     wi, wo = _pairs(600, 11, params["type"] == "roughdielectric")
     f, pdf = fgf._core.bsdf_eval_pdf(str(scene), 0, wi, wo)
-    f_mi, pdf_mi = _mitsuba_eval_pdf(params, wi, wo)
+    f_mi, pdf_mi = mitsuba_eval_pdf(params, wi, wo)
     err = np.abs(f - f_mi) - 2e-4 * np.abs(f_mi)
     worst = np.unravel_index(np.argmax(err), err.shape)
     assert err.max() < 1e-6, f"{name}: value {f[worst]} vs Mitsuba {f_mi[worst]} at wi={wi[worst[0]]}, wo={wo[worst[0]]}"
@@ -372,16 +351,6 @@ RENDERS = {
 }
 
 
-def _render_fgf(scene: Path) -> np.ndarray:
-    return np.stack([fgf.render(scene, spp=SPP, seed=3000 + i, progress=False) for i in range(K)]).astype(np.float64)
-
-
-def _render_mitsuba(scene: Path) -> np.ndarray:
-    mi = _mitsuba()
-    sc = mi.load_file(str(scene))
-    return np.stack([np.array(mi.render(sc, seed=i, spp=SPP))[..., :3] for i in range(K)]).astype(np.float64)
-
-
 @pytest.mark.slow
 @pytest.mark.parametrize("name", sorted(RENDERS))
 def test_anisotropic_render_matches_mitsuba(tmp_path, name):
@@ -390,4 +359,4 @@ def test_anisotropic_render_matches_mitsuba(tmp_path, name):
     shape, bsdf = RENDERS[name]
     scene = tmp_path / f"{name}.xml"
     scene.write_text(SCENE.format(spp=SPP, shape=shape.format(bsdf=bsdf)))
-    assert_agree(name, _render_fgf(scene), _render_mitsuba(scene))
+    assert_agree(name, render_fgf(scene, SPP, 3000), render_mitsuba(scene, SPP))

@@ -24,6 +24,7 @@ import numpy as np
 import pytest
 
 import fgf
+import test_materials as materials
 from test_render_mitsuba import K, assert_agree
 
 SPP = 16
@@ -103,21 +104,12 @@ def _write(tmp: Path, name: str, integrator: str, max_depth: int = 3) -> Path:
     return p
 
 
-def _mitsuba():
-    import mitsuba as mi
-
-    mi.set_variant("scalar_rgb")
-    return mi
-
-
 def render_fgf(scene: Path) -> np.ndarray:
-    return np.stack([fgf.render(scene, spp=SPP, seed=3000 + i, progress=False) for i in range(K)]).astype(np.float64)
+    return materials.render_fgf(scene, SPP, 3000)
 
 
 def render_mitsuba(scene: Path) -> np.ndarray:
-    mi = _mitsuba()
-    sc = mi.load_file(str(scene))
-    return np.stack([np.array(mi.render(sc, seed=i, spp=SPP))[..., :3] for i in range(K)]).astype(np.float64)
+    return materials.render_mitsuba(scene, SPP)
 
 
 @pytest.mark.parametrize("integrator", ["path", "volpath", "volpathmis", "direct"])

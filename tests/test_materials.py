@@ -99,14 +99,16 @@ def _mitsuba():
     return mi
 
 
-def render_fgf(scene: Path) -> np.ndarray:
-    return np.stack([fgf.render(scene, spp=SPP, seed=2000 + i, progress=False) for i in range(K)]).astype(np.float64)
+def render_fgf(scene: Path, spp: int = SPP, seed0: int = 2000) -> np.ndarray:
+    """K independent fgf renders (seeds seed0, seed0 + 1, ...), (K, H, W, 3)."""
+    return np.stack([fgf.render(scene, spp=spp, seed=seed0 + i, progress=False) for i in range(K)]).astype(np.float64)
 
 
-def render_mitsuba(scene: Path) -> np.ndarray:
+def render_mitsuba(scene: Path, spp: int = SPP) -> np.ndarray:
+    """K independent Mitsuba (``scalar_rgb``) renders, (K, H, W, 3)."""
     mi = _mitsuba()
     sc = mi.load_file(str(scene))
-    return np.stack([np.array(mi.render(sc, seed=i, spp=SPP))[..., :3] for i in range(K)]).astype(np.float64)
+    return np.stack([np.array(mi.render(sc, seed=i, spp=spp))[..., :3] for i in range(K)]).astype(np.float64)
 
 
 def compare(fgf_scene: Path, mitsuba_scene: Path) -> None:
@@ -190,11 +192,17 @@ def _direction_grid() -> tuple[np.ndarray, np.ndarray]:
 
 
 def _mitsuba_eval_pdf(params: dict, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    mi = _mitsuba()
     d = {"type": "roughplastic", **params}
     d["diffuse_reflectance"] = {"type": "rgb", "value": list(DIFFUSE)}
     d["specular_reflectance"] = {"type": "rgb", "value": list(SPECULAR)}
-    b = mi.load_dict(d)
+    return mitsuba_eval_pdf(d, wi, wo)
+
+
+def mitsuba_eval_pdf(bsdf: dict, wi: np.ndarray, wo: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Mitsuba's ``BSDF.eval`` and ``pdf`` of the BSDF dict ``bsdf`` for
+    local-frame direction pairs (rows of ``wi``, ``wo``)."""
+    mi = _mitsuba()
+    b = mi.load_dict(bsdf)
     ctx = mi.BSDFContext()
     f, pdf = [], []
     for a, o in zip(wi, wo):
