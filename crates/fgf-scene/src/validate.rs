@@ -691,6 +691,23 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
             format!("this BSDF has no textured parameter {param:?}"),
         );
     };
+    let r = match param {
+        TexturedParam::Alpha | TexturedParam::AlphaU | TexturedParam::AlphaV => ALPHA,
+        TexturedParam::Eta | TexturedParam::K => NON_NEGATIVE,
+        _ => UNIT,
+    };
+    check_texture_values(name, t, r)
+}
+
+/// A textured area-emitter `radiance`: a finite `to_uv`, an image whose
+/// size matches its data, values ≥ 0.
+fn check_emission_texture(t: &TextureDesc) -> Check {
+    check_texture_values("radiance", t, NON_NEGATIVE)
+}
+
+/// Texture `t` as parameter `name`: a finite `to_uv`, an image whose size
+/// matches its data, and values in range `r`.
+fn check_texture_values(name: &str, t: &TextureDesc, r: Range<f64>) -> Check {
     let to_uv = match t {
         TextureDesc::Checkerboard { to_uv, .. } => to_uv,
         TextureDesc::Bitmap { image, to_uv, .. } => {
@@ -710,11 +727,6 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
         return fail(Some(name), "the texture's to_uv has non-finite entries");
     }
     let (lo, hi) = t.range();
-    let r = match param {
-        TexturedParam::Alpha | TexturedParam::AlphaU | TexturedParam::AlphaV => ALPHA,
-        TexturedParam::Eta | TexturedParam::K => NON_NEGATIVE,
-        _ => UNIT,
-    };
     for v in [lo, hi] {
         if !(r.ok)(v as f64) {
             return fail(
@@ -722,45 +734,6 @@ fn check_texture(base: &BsdfDesc, param: TexturedParam, t: &TextureDesc) -> Chec
                 format!(
                     "the texture for '{name}' has a value {v}, outside the parameter's range ({})",
                     r.text
-                ),
-            );
-        }
-    }
-    Ok(())
-}
-
-/// A textured area-emitter `radiance`: a finite `to_uv`, an image whose
-/// size matches its data, values ≥ 0.
-fn check_emission_texture(t: &TextureDesc) -> Check {
-    let to_uv = match t {
-        TextureDesc::Checkerboard { to_uv, .. } => to_uv,
-        TextureDesc::Bitmap { image, to_uv, .. } => {
-            if image.width == 0
-                || image.height == 0
-                || image.data.len() != 3 * image.width * image.height
-            {
-                return fail(
-                    Some("radiance"),
-                    "the texture's image is empty or its size does not match its data",
-                );
-            }
-            to_uv
-        }
-    };
-    if !to_uv.is_finite() {
-        return fail(
-            Some("radiance"),
-            "the texture's to_uv has non-finite entries",
-        );
-    }
-    let (lo, hi) = t.range();
-    for v in [lo, hi] {
-        if !(NON_NEGATIVE.ok)(v as f64) {
-            return fail(
-                Some("radiance"),
-                format!(
-                    "the texture for 'radiance' has a value {v}, outside the parameter's range ({})",
-                    NON_NEGATIVE.text
                 ),
             );
         }
