@@ -469,6 +469,29 @@ fn ior(e: &Entry) -> Result<f64, SceneError> {
     )
 }
 
+/// The BSDF nested in wrapper `n` (`twosided`, `mask`) at nesting `depth`,
+/// with `n`'s id on the resolving stack so that a reference cycle is an
+/// error.
+fn nested_bsdf<'a>(
+    ctx: &mut Ctx<'a>,
+    n: &'a XNode,
+    target: &'a XNode,
+    depth: usize,
+) -> Result<BsdfDesc, SceneError> {
+    if depth > 4 {
+        return Err(n.err("BSDFs nested too deep"));
+    }
+    let pushed = n
+        .attr("id")
+        .map(|id| ctx.resolving.push(id.to_string()))
+        .is_some();
+    let inner = bsdf_desc(ctx, target, depth + 1);
+    if pushed {
+        ctx.resolving.pop();
+    }
+    inner
+}
+
 fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDesc, SceneError> {
     check_object_attrs(n)?;
     let ty = plugin_type(n, "BSDF", BSDFS)?;
@@ -698,17 +721,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
                 0 => return Err(n.err("mask needs one nested BSDF")),
                 _ => return Err(nested[1].node.err("mask takes one nested BSDF")),
             }
-            if depth > 4 {
-                return Err(n.err("BSDFs nested too deep"));
-            }
-            let pushed = n
-                .attr("id")
-                .map(|id| ctx.resolving.push(id.to_string()))
-                .is_some();
-            let inner = bsdf_desc(ctx, nested[0].target, depth + 1);
-            if pushed {
-                ctx.resolving.pop();
-            }
+            let inner = nested_bsdf(ctx, n, nested[0].target, depth);
             BsdfDesc::Mask {
                 opacity,
                 nested: Box::new(inner?),
@@ -732,17 +745,7 @@ fn bsdf_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode, depth: usize) -> Result<BsdfDe
             if target.attr("type") == Some("mask") {
                 return Err(nested[0].node.err(crate::validate::TWOSIDED_MASK));
             }
-            if depth > 4 {
-                return Err(n.err("BSDFs nested too deep"));
-            }
-            let pushed = n
-                .attr("id")
-                .map(|id| ctx.resolving.push(id.to_string()))
-                .is_some();
-            let inner = bsdf_desc(ctx, target, depth + 1);
-            if pushed {
-                ctx.resolving.pop();
-            }
+            let inner = nested_bsdf(ctx, n, target, depth);
             BsdfDesc::TwoSided(Box::new(inner?))
         }
     };
