@@ -121,6 +121,8 @@ const STACK: usize = 64;
 /// The reference to the leaf of primitives `start..start + count` (`start`
 /// a multiple of [`PACK`], `1 <= count <= MAX_LEAF`).
 fn leaf_ref(start: u32, count: u32) -> u32 {
+    // 27 bits of packs: more primitives than any scene that fits in memory.
+    debug_assert!(start / (PACK as u32) < 1 << 27 && (1..=16).contains(&count));
     LEAF | (start / PACK as u32) << 4 | (count - 1)
 }
 
