@@ -41,8 +41,11 @@ trap 'rm -rf "$tmp"' EXIT
 valgrind --tool=callgrind --callgrind-out-file="$tmp/cg.out" "$bin" "$scene" "$spp" "$threads" "$@" \
     >"$tmp/stdout" 2>"$tmp/stderr" || { cat "$tmp/stderr" >&2; exit 1; }
 total=$(grep -o 'Collected : [0-9]*' "$tmp/stderr" | grep -o '[0-9]*$')
+# awk reads the whole listing: stopping at the first match (grep -m1) made
+# callgrind_annotate die of SIGPIPE on long listings, which pipefail turned
+# into a silent exit.
 render=$(callgrind_annotate --inclusive=yes "$tmp/cg.out" 2>/dev/null \
-    | grep -m1 'fgf_render::render::Prepared::render_range' | awk '{gsub(",", "", $1); print $1}')
+    | awk '!done && /fgf_render::render::Prepared::render_range/ {gsub(",", "", $1); print $1; done = 1}')
 hash=$(grep -o 'hash [0-9a-f]*' "$tmp/stdout" | cut -d' ' -f2)
 samples=$(grep -o 'samples [0-9]*$' "$tmp/stdout" | cut -d' ' -f2)
 echo "instructions $total render ${render:-?} per-sample $(awk -v r="${render:-0}" -v n="$samples" 'BEGIN{printf "%.1f", r / n}') hash $hash"

@@ -69,6 +69,70 @@ fn packed_bvh_matches_brute_force() {
     }
 }
 
+/// The 4-wide tree over a soup of thousands of small triangles finds the
+/// nearest hit that testing every leaf pack finds (the same arithmetic, so
+/// the same distance and primitive), for random rays, rays along the axes
+/// (zero direction components) from the soup's vertices (origins on slab
+/// planes) and random `t_max`; the all-hits query finds as many hits.
+#[test]
+fn wide_bvh_matches_brute_force_on_large_soup() {
+    let mut s = crate::math::Sampler::new(13, 0, 0);
+    let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+    let mesh = triangle_soup(&mut s, 5000, 0.2);
+    let vertices = mesh.positions.clone();
+    let g = Geometry::build(&[plain_shape(GeometryDesc::Mesh(mesh), Mat4::IDENTITY)]).unwrap();
+    assert!(
+        g.bvh.depth_bound() > 2 * 3,
+        "the tree should be several levels deep"
+    );
+    let mut n_hits = 0;
+    for k in 0..4000 {
+        let (o, d) = if k % 2 == 0 {
+            let o = r3(&mut s) * 6.0 - Vec3::ONE;
+            (o, crate::math::sample_uniform_sphere(s.next_2d()))
+        } else {
+            let v = vertices[(s.next_1d() * vertices.len() as f32) as usize % vertices.len()];
+            let mut d = Vec3::ZERO;
+            d[k / 2 % 3] = if k / 6 % 2 == 0 { 1.0 } else { -1.0 };
+            (v - d * 0.5, d)
+        };
+        let ray = Ray { o, d };
+        let t_max = if k % 3 == 0 {
+            f32::INFINITY
+        } else {
+            4.0 * s.next_1d()
+        };
+        // Brute force: every pack, nearest first, first lane on ties.
+        let od = super::pack::splat_ray(&ray);
+        let mut want: Option<(f32, u32)> = None;
+        let mut count = 0;
+        for (i, pack) in g.packs.iter().enumerate() {
+            let (mask, t, _, _) = pack.hits(od.0, od.1, t_max);
+            for l in 0..4 {
+                if mask & (1 << l) != 0 {
+                    count += 1;
+                    if want.is_none_or(|w| t[l] < w.0) {
+                        want = Some((t[l], g.prims[4 * i + l]));
+                    }
+                }
+            }
+        }
+        n_hits += count;
+        let got = g.intersect(&ray, t_max).map(|h| (h.t, h.prim));
+        match (got, want) {
+            (Some(a), Some(b)) => assert!(a.0 == b.0, "ray {k}: {a:?} vs {b:?}"),
+            (a, b) => assert_eq!(a, b, "ray {k}"),
+        }
+        let mut all = 0;
+        g.for_each_hit(&ray, t_max, |_, _, _, _| {
+            all += 1;
+            true
+        });
+        assert_eq!(all, count, "ray {k}");
+    }
+    assert!(n_hits > 2000, "too few hits to test anything: {n_hits}");
+}
+
 /// A scene of every primitive kind (a triangle soup, cubes and
 /// rectangles as parallelograms, spheres, disks): the nearest, the two
 /// nearest and the all-hits queries agree with brute force over the
