@@ -132,17 +132,12 @@ def test_corpus_scene(small_corpus: Path, scene: str, missing: str | None) -> No
 # removed): the per-seed image means of many seeds, so that a bias of a few
 # tenths of a percent shows. K = 128 seeds at 256 spp give a standard error
 # of the difference of about 0.085 % of the image mean. fgf is 0.55 %
-# brighter than Mitsuba's volpath here (z ≈ 6.5), from the `thindielectric`
-# spheres around the emitter. The mechanism (docs/compatibility.md, "The
-# mechanism"): Mitsuba's volpath finds the light behind a thin sheet by
-# light sampling through it as well as by BSDF sampling, combined by MIS,
-# while fgf, like Mitsuba's `path`, uses the BSDF-sampled crossing only; and
-# for an emitter on a mesh with vertex normals (torus1.obj) Mitsuba's light
-# sampling converts the area pdf with the shading normal's cosine, so it
-# does not estimate what BSDF sampling does (Mitsuba's `direct` on a
-# triangle with tilted vertex normals: -18 %). fgf keeps the BSDF-sampling
-# value, the true one. A smaller part, tied to the open mesh
-# sphere_base.obj, is not traced. The test fails if the two come to agree
+# brighter than Mitsuba's volpath here (z ≈ 6.3), from the `thindielectric`
+# spheres around the emitter. A proposed mechanism (docs/compatibility.md,
+# "The mechanism": Mitsuba's volpath light-samples through thin sheets with
+# a shading-cosine pdf for smooth-normal emitters, fgf's did not) no longer
+# applies: fgf's volpath now treats thin sheets in shadow rays as Mitsuba's
+# does, and the gap is unchanged, so its cause is open. The test fails if the two come to agree
 # (then the docs and this test need updating) and is marked an expected
 # failure while they disagree; a failure of its own set-up is an ordinary
 # failure.
