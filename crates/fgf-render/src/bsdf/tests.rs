@@ -75,29 +75,15 @@ fn cases() -> Vec<(String, Bsdf)> {
             for a in [0.2f32, 0.6] {
                 let d = md(kind, a, visible);
                 let tag = format!("{kind:?} a={a} visible={visible}");
-                v.push((
-                    format!("roughconductor {tag}"),
-                    bsdf(BsdfKind::RoughConductor(RoughConductor {
-                        eta: Spectrum::new(0.2, 0.9, 1.1),
-                        k: Spectrum::new(3.9, 2.4, 2.2),
-                        r: Spectrum::ONE,
-                        mirror: false,
-                        distr: d,
-                    })),
-                ));
-                v.push((
-                    format!("roughdielectric {tag}"),
-                    bsdf(BsdfKind::RoughDielectric(RoughDielectric {
-                        eta: 1.5,
-                        r: Spectrum::ONE,
-                        t: Spectrum::ONE,
-                        distr: d,
-                    })),
-                ));
+                let mut distrs = vec![(tag.clone(), d)];
                 if a == 0.2 {
                     // Anisotropic: rougher along y than along x.
-                    let d = Microfacet { ay: 0.7, ..d };
-                    let tag = format!("{kind:?} ax=0.2 ay=0.7 visible={visible}");
+                    distrs.push((
+                        format!("{kind:?} ax=0.2 ay=0.7 visible={visible}"),
+                        Microfacet { ay: 0.7, ..d },
+                    ));
+                }
+                for (tag, d) in distrs {
                     v.push((
                         format!("roughconductor {tag}"),
                         bsdf(BsdfKind::RoughConductor(RoughConductor {
