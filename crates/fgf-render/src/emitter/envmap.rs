@@ -34,6 +34,46 @@ pub struct Envmap {
     col_cdf: Vec<f32>,
     /// Per cell, the pdf with respect to the unit square of `(u, v)`.
     cell_pdf: Vec<f32>,
+    /// Guide tables of `row_cdf` and of each row of `col_cdf` (see [`Guide`]).
+    row_guide: Guide,
+    col_guide: Vec<Guide>,
+}
+
+/// A guide table of a cumulative table (`n + 1` entries, the first 0, the
+/// last 1): for each of `n` equal bins of `u`, the interval [`pick`] returns
+/// at the bin's lower end. Inverting at `u` then starts there and walks the
+/// few intervals to the answer, instead of a binary search whose dependent
+/// loads dominate the cost of sampling the map; the answer is the same.
+#[derive(Debug, Clone)]
+struct Guide {
+    start: Vec<u32>,
+}
+
+impl Guide {
+    fn new(cdf: &[f32]) -> Guide {
+        let n = cdf.len() - 1;
+        let start = (0..n)
+            .map(|g| pick_interval(cdf, g as f32 / n as f32) as u32)
+            .collect();
+        Guide { start }
+    }
+
+    /// [`pick`] on `cdf`, the table this guide was made from.
+    #[inline(always)]
+    fn pick(&self, cdf: &[f32], u: f32) -> (usize, f32) {
+        let n = cdf.len() - 1;
+        let g = ((u * n as f32) as usize).min(n - 1);
+        // The bin's start is exact for `u` at its lower end; rounding of
+        // `u · n` may put `u` just below it, hence the walk down as well.
+        let mut k = self.start[g] as usize;
+        while k + 1 < n && cdf[k + 1] <= u {
+            k += 1;
+        }
+        while k > 0 && cdf[k] > u {
+            k -= 1;
+        }
+        (k, within(cdf, k, u))
+    }
 }
 
 /// Luminance of linear Rec. 709 RGB.
@@ -90,6 +130,8 @@ impl Envmap {
         let cells = (nx * ny) as f64;
         let cell_pdf = weight.iter().map(|x| (x / total * cells) as f32).collect();
         let l = Mat3::from_mat4(to_world);
+        let row_guide = Guide::new(&row_cdf);
+        let col_guide = col_cdf.chunks_exact(nx + 1).map(Guide::new).collect();
         Envmap {
             w,
             h,
@@ -99,6 +141,8 @@ impl Envmap {
             row_cdf,
             col_cdf,
             cell_pdf,
+            row_guide,
+            col_guide,
         }
     }
 
@@ -145,17 +189,30 @@ impl Envmap {
     #[inline]
     pub fn pdf(&self, d: Vec3) -> f32 {
         let (u, v, sin_t) = self.grid_uv(d);
+        self.pdf_at(u, v, sin_t)
+    }
+
+    #[inline]
+    fn pdf_at(&self, u: f32, v: f32, sin_t: f32) -> f32 {
         if sin_t <= 0.0 {
             return 0.0;
         }
         self.cell_pdf[self.cell(u, v)] / (2.0 * PI * PI * sin_t)
     }
 
+    /// [`Self::eval`] and [`Self::pdf`] of one direction, which they share
+    /// the costly mapping to the image of.
+    #[inline]
+    pub fn eval_pdf(&self, d: Vec3) -> (Spectrum, f32) {
+        let (u, v, sin_t) = self.grid_uv(d);
+        (self.lookup(u, v), self.pdf_at(u, v, sin_t))
+    }
+
     /// A world direction toward the environment, its radiance and pdf.
     pub fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Spectrum, f32)> {
         let (nx, ny) = (self.w, self.h - 1);
-        let (j, fv) = pick(&self.row_cdf, u[1]);
-        let (i, fu) = pick(&self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)], u[0]);
+        let (j, fv) = self.row_guide.pick(&self.row_cdf, u[1]);
+        let (i, fu) = self.col_guide[j].pick(&self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)], u[0]);
         let gu = (i as f32 + fu) / nx as f32;
         let gv = (j as f32 + fv) / ny as f32;
         let theta = gv * PI;
@@ -176,18 +233,30 @@ impl Envmap {
 }
 
 /// Invert a cumulative table `cdf` (`cdf[0] = 0`, last = 1) at `u`: the
-/// interval and the position within it in [0, 1).
+/// interval and the position within it in [0, 1). (The reference for
+/// [`Guide::pick`], which gives the same answer faster.)
+#[cfg(test)]
 fn pick(cdf: &[f32], u: f32) -> (usize, f32) {
+    let k = pick_interval(cdf, u);
+    (k, within(cdf, k, u))
+}
+
+/// The interval of [`pick`]: the last `k < n` with `cdf[k] <= u` (0 if none).
+fn pick_interval(cdf: &[f32], u: f32) -> usize {
     let n = cdf.len() - 1;
     // First index with cdf[k] > u, minus one.
-    let k = cdf.partition_point(|&c| c <= u).clamp(1, n) - 1;
+    cdf.partition_point(|&c| c <= u).clamp(1, n) - 1
+}
+
+/// Where `u` lies within the interval `k` of `cdf`, in [0, 1).
+#[inline(always)]
+fn within(cdf: &[f32], k: usize, u: f32) -> f32 {
     let (a, b) = (cdf[k], cdf[k + 1]);
-    let f = if b > a {
+    if b > a {
         ((u - a) / (b - a)).clamp(0.0, 0.999_999)
     } else {
         0.5
-    };
-    (k, f)
+    }
 }
 
 #[cfg(test)]
@@ -215,6 +284,44 @@ mod tests {
             },
             rot,
         )
+    }
+
+    /// The guide tables invert the cumulative tables exactly as the binary
+    /// search does, on tables with empty intervals (zero-weight cells), a
+    /// dominant interval (a sun) and at the bins' edges.
+    #[test]
+    fn guide_pick_is_the_binary_search() {
+        let mut rng = Pcg64::seed_from_u64(11);
+        let weights: [&[f32]; 4] = [
+            &[1.0; 7],
+            &[0.0, 0.0, 3.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0],
+            &[
+                1e-6, 1e-6, 1e-6, 1.0, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6,
+            ],
+            &[5.0, 0.0],
+        ];
+        for w in weights {
+            let total: f32 = w.iter().sum();
+            let mut cdf = vec![0.0];
+            let mut acc = 0.0;
+            for x in w {
+                acc += x;
+                cdf.push(acc / total);
+            }
+            *cdf.last_mut().unwrap() = 1.0;
+            let guide = Guide::new(&cdf);
+            let n = w.len();
+            let mut us: Vec<f32> = (0..=n).map(|g| g as f32 / n as f32).collect();
+            us.extend(cdf.iter().flat_map(|&c| [c, c.next_down(), c.next_up()]));
+            us.extend((0..2000).map(|_| rng.random::<f32>()));
+            for u in us.into_iter().filter(|u| (0.0..1.0).contains(u)) {
+                let (a, b) = (guide.pick(&cdf, u), pick(&cdf, u));
+                assert!(
+                    a.0 == b.0 && a.1.to_bits() == b.1.to_bits(),
+                    "{w:?} u={u}: {a:?} vs {b:?}"
+                );
+            }
+        }
     }
 
     /// The sampled directions have the density `pdf`, and `pdf` integrates

@@ -202,7 +202,7 @@ impl Emitter {
     pub fn environment(&self, d: Vec3) -> Option<(Spectrum, f32)> {
         match self {
             Emitter::Constant { radiance } => Some((*radiance, UNIFORM_SPHERE_PDF)),
-            Emitter::Envmap(e) => Some((e.eval(d), e.pdf(d))),
+            Emitter::Envmap(e) => Some(e.eval_pdf(d)),
             _ => None,
         }
     }
