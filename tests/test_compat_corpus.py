@@ -182,7 +182,7 @@ def test_emitter_inside_medium_light_only_against_many_seeds(small_corpus: Path)
         + (ref * rel_se / (1 + rel)) ** 2
     )
     z = (ma - ref) / se
-    msg = f"emitter only: fgf {ma} vs mitsuba {mb} / (1 + {rel}) = {ref}, SE {se}, z {z}, fgf/mitsuba - 1 = {ma / mb - 1}"
+    msg = f"emitter only: fgf {ma} vs mitsuba {mb} / (1 + {rel} +- {rel_se}) = {ref}, SE {se}, z {z}, fgf/mitsuba - 1 = {ma / mb - 1}"
     print(msg)
     assert (np.abs(z) <= Z_MEAN).all(), msg
 
