@@ -298,8 +298,8 @@ def test_smooth_mesh_area_emitter_emits_by_its_shading_normal(tmp_path: Path) ->
     and a `direct` render. Mitsuba decides the emitting side and converts the
     light's area pdf to solid angle with the shading normal; with the
     geometric normal, fgf lit the floor 5 % more brightly than Mitsuba here
-    (z ≈ 30 over 64 seeds; the bias of the corpus's emitter-in-medium scene,
-    docs/compatibility.md)."""
+    (z ≈ 30 over 64 seeds; docs/compatibility.md, "The emitter-in-medium
+    bias")."""
     _smooth_octahedron_obj(tmp_path / "ball.obj")
     for integrator in ('<integrator type="volpath"><integer name="max_depth" value="3"/></integrator>', '<integrator type="direct"/>'):
         body = (
