@@ -354,6 +354,7 @@ pub fn plan(scene: &SceneDesc, nodes: Option<usize>) -> Result<TruthPlan, Render
                 sigma_t: *sigma_t,
                 albedo: *albedo,
                 phase: *phase,
+                sample_emitters: true,
             },
             Some(g) => {
                 let grey = sigma_t[0] == sigma_t[1] && sigma_t[1] == sigma_t[2];
@@ -382,6 +383,7 @@ pub fn plan(scene: &SceneDesc, nodes: Option<usize>) -> Result<TruthPlan, Render
                     albedo: VolumeDesc::Constant(*albedo),
                     scale,
                     phase: *phase,
+                    sample_emitters: true,
                 }
             }
         };

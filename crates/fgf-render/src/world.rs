@@ -51,6 +51,9 @@ pub struct World {
     /// Index of the environment emitter (`constant` or `envmap`), if any.
     pub env: Option<u32>,
     pub media: Vec<Medium>,
+    /// Per medium, Mitsuba's `sample_emitters`: whether scattering events in
+    /// it estimate direct light by light sampling (else phase sampling alone).
+    pub media_sample_emitters: Vec<bool>,
     pub camera: Camera,
     pub camera_medium: Option<u32>,
     pub max_depth: u32,
@@ -86,6 +89,19 @@ impl World {
             .enumerate()
             .map(|(i, m)| Medium::from_desc(m, i))
             .collect::<Result<Vec<_>, _>>()?;
+        let media_sample_emitters = desc
+            .media
+            .iter()
+            .map(|m| match m {
+                fgf_scene::MediumDesc::Homogeneous {
+                    sample_emitters, ..
+                }
+                | fgf_scene::MediumDesc::Heterogeneous {
+                    sample_emitters, ..
+                } => *sample_emitters,
+                fgf_scene::MediumDesc::NonExponential { .. } => true,
+            })
+            .collect();
         let mut emitters = Vec::new();
         let mut shapes = Vec::new();
         let index = |m: Option<usize>| m.map(|i| i as u32);
@@ -131,6 +147,7 @@ impl World {
             emitters,
             env,
             media,
+            media_sample_emitters,
             camera,
             camera_medium: index(desc.sensor.medium),
             // Mitsuba stores max_depth as unsigned: -1 means unbounded.

@@ -166,6 +166,7 @@ fn furnace_homogeneous_returns_environment_radiance() {
         sigma_t: [2.0, 4.0, 8.0],
         albedo: [1.0; 3],
         phase: PhaseDesc::Hg { g: 0.4 },
+        sample_emitters: true,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
     assert_furnace("homogeneous furnace", &mut s, 0.7);
@@ -188,6 +189,7 @@ fn furnace_with_camera_inside_medium() {
         sigma_t: [1.5; 3],
         albedo: [1.0; 3],
         phase: PhaseDesc::Isotropic,
+        sample_emitters: true,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
     assert_furnace("furnace, camera inside", &mut s, 1.3);
@@ -214,6 +216,7 @@ fn furnace_heterogeneous_returns_environment_radiance() {
         albedo: VolumeDesc::Constant([1.0; 3]),
         scale: 1.0,
         phase: PhaseDesc::Isotropic,
+        sample_emitters: true,
     });
     s.shapes.push(cube(Mat4::IDENTITY, Some(0)));
     assert_furnace("heterogeneous furnace", &mut s, 0.9);
@@ -247,6 +250,7 @@ fn uncollided_slab_transmittance_homogeneous_chromatic() {
             sigma_t: st,
             albedo: [0.0; 3],
             phase: PhaseDesc::Isotropic,
+            sample_emitters: true,
         },
         st.map(|v| v as f64),
     );
@@ -275,6 +279,7 @@ fn uncollided_slab_transmittance_grid() {
             albedo: VolumeDesc::Constant([0.0; 3]),
             scale: 1.0,
             phase: PhaseDesc::Isotropic,
+            sample_emitters: true,
         },
         [3.0; 3],
     );
@@ -303,6 +308,7 @@ fn thin_slab_single_scattering(absorbers: usize) {
         sigma_t: [sigma_t as f32; 3],
         albedo: [albedo as f32; 3],
         phase: PhaseDesc::Hg { g },
+        sample_emitters: true,
     });
     let slab = |z0: f32, h: f32| {
         Mat4::from_translation(Vec3::new(0.0, 0.0, z0 + h / 2.0))
@@ -314,6 +320,7 @@ fn thin_slab_single_scattering(absorbers: usize) {
             sigma_t: [sigma_abs as f32; 3],
             albedo: [0.0; 3],
             phase: PhaseDesc::Isotropic,
+            sample_emitters: true,
         });
         s.shapes
             .push(cube(slab(0.5 + 0.2 * k as f32, h_abs as f32), Some(k + 1)));

@@ -583,6 +583,10 @@ pub enum MediumDesc {
         sigma_t: Rgb,
         albedo: Rgb,
         phase: PhaseDesc,
+        /// Mitsuba's `sample_emitters`: next-event estimation at scattering
+        /// events in this medium (default true); false leaves phase sampling
+        /// alone there.
+        sample_emitters: bool,
     },
     /// `heterogeneous`: `sigma_t(x) = scale * sigma_t_volume(x)`.
     Heterogeneous {
@@ -590,6 +594,8 @@ pub enum MediumDesc {
         albedo: VolumeDesc,
         scale: f32,
         phase: PhaseDesc,
+        /// As for `Homogeneous`.
+        sample_emitters: bool,
     },
     /// `fgf` and `nonexponential`: mean extinction `sigma_t` (already scaled),
     /// optional macro-scale `density` grid multiplying it.

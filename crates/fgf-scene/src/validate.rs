@@ -823,6 +823,7 @@ fn check_medium(m: &MediumDesc) -> Check {
             sigma_t,
             albedo,
             phase,
+            ..
         } => {
             range_rgb("sigma_t", sigma_t, NON_NEGATIVE)?;
             range_rgb("albedo", albedo, UNIT)?;
@@ -833,6 +834,7 @@ fn check_medium(m: &MediumDesc) -> Check {
             albedo,
             scale,
             phase,
+            ..
         } => {
             range("scale", *scale as f64, SCALE)?;
             check_volume(sigma_t, "sigma_t", NON_NEGATIVE)?;

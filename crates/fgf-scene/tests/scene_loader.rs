@@ -175,6 +175,7 @@ fn reference_homogeneous_scene_loads_with_mitsubas_values() {
             sigma_t,
             albedo,
             phase,
+            ..
         } => {
             assert_eq!(*sigma_t, [4.0; 3]);
             assert_eq!(*albedo, [0.8; 3]);
@@ -194,6 +195,7 @@ fn reference_heterogeneous_scene_loads_its_grid() {
             albedo: VolumeDesc::Constant(albedo),
             scale,
             phase,
+            ..
         } => {
             assert_eq!(*scale, 4.0);
             assert_eq!(*albedo, [0.8; 3]);
@@ -318,6 +320,7 @@ fn shared_medium_by_ref_for_shape_and_sensor() {
             sigma_t,
             albedo,
             phase,
+            ..
         } => {
             assert_eq!(
                 (*sigma_t, *albedo, *phase),
@@ -831,6 +834,7 @@ fn heterogeneous_constvolume_albedo_and_hg_phase() {
             albedo,
             scale,
             phase,
+            ..
         } => {
             assert!(matches!(sigma_t, VolumeDesc::Constant(c) if *c == [2.0; 3]));
             assert!(matches!(albedo, VolumeDesc::Constant(c) if *c == [0.1, 0.2, 0.3]));
@@ -1710,4 +1714,30 @@ fn a_define_the_scene_never_uses_is_an_error_naming_it() {
         e.contains("t.xml") && e.contains("'sps'") && e.contains("spp"),
         "{e}"
     );
+}
+
+#[test]
+fn sample_emitters_is_read_per_medium_and_defaults_to_true() {
+    let s = ok(r#"<integrator type="volpath"/>
+<shape type="cube"><medium type="homogeneous" name="interior">
+    <boolean name="sample_emitters" value="false"/>
+</medium></shape>
+<shape type="cube"><medium type="heterogeneous" name="interior">
+    <boolean name="sample_emitters" value="false"/>
+</medium></shape>
+<shape type="cube"><medium type="homogeneous" name="interior"/></shape>"#);
+    let flags: Vec<bool> = s
+        .media
+        .iter()
+        .map(|m| match m {
+            MediumDesc::Homogeneous {
+                sample_emitters, ..
+            }
+            | MediumDesc::Heterogeneous {
+                sample_emitters, ..
+            } => *sample_emitters,
+            m => panic!("{m:?}"),
+        })
+        .collect();
+    assert_eq!(flags, [false, false, true]);
 }

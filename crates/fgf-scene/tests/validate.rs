@@ -138,12 +138,14 @@ fn numbers_out_of_range_name_the_parameter_and_range() {
         sigma_t: [1.0, f32::NAN, 1.0],
         albedo: [0.5; 3],
         phase: PhaseDesc::Hg { g: 0.5 },
+        sample_emitters: true,
     });
     has(&refused(&s), &["medium 0", "invalid sigma_t", ">= 0"]);
     s.media[0] = MediumDesc::Homogeneous {
         sigma_t: [1.0; 3],
         albedo: [0.5; 3],
         phase: PhaseDesc::Hg { g: -1.0 },
+        sample_emitters: true,
     };
     has(&refused(&s), &["medium 0", "invalid g = -1", "-1 < g < 1"]);
 }
@@ -213,6 +215,7 @@ fn transforms_meshes_and_grids_must_be_usable() {
         albedo: VolumeDesc::Constant([0.5; 3]),
         scale: 1.0,
         phase: PhaseDesc::Isotropic,
+        sample_emitters: true,
     });
     has(&refused(&s), &["medium 0", "holds 7 values", "[2, 2, 2]"]);
     let mut bad = vec![1.0; 8];

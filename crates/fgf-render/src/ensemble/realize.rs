@@ -162,6 +162,7 @@ pub fn render_realization(
             albedo: VolumeDesc::Constant(*albedo),
             scale: 1.0,
             phase: *phase,
+            sample_emitters: true,
         };
         stats.push(st);
     }

@@ -13,7 +13,9 @@
 //! * Next-event estimation at every scattering event and at every
 //!   non-delta surface, combined with phase/BSDF sampling by multiple
 //!   importance sampling (power heuristic). Emitters hit by a path after a
-//!   delta surface (or directly from the camera) count fully.
+//!   delta surface (or directly from the camera) count fully. A medium with
+//!   `sample_emitters = false` has no next-event estimation at its
+//!   scattering events, and emission found after one counts fully.
 //! * Shadow rays pass through `null` boundaries and media (transmittance
 //!   estimates) and, under `volpath`, through `mask` and `thindielectric`
 //!   surfaces with their null transmission; any other surface blocks them.
@@ -139,20 +141,27 @@ impl World {
                     }
                     let p = ray.at(ds.t);
                     let phase = med.phase();
-                    // Next-event estimation from the medium vertex.
-                    let vertex = MediumVertex {
-                        p,
-                        d: ray.d,
-                        phase,
-                        medium,
-                    };
-                    if let Some((le, f, w)) = self.direct(&vertex, s) {
-                        l += thr * le * (f * w * inv_mis);
+                    // Next-event estimation from the medium vertex, unless
+                    // the medium turns it off (`sample_emitters = false`):
+                    // then phase sampling alone finds the light, and the
+                    // emission it finds counts fully, as after a delta
+                    // interaction (Mitsuba's semantics).
+                    let nee = self.media_sample_emitters[m as usize];
+                    if nee {
+                        let vertex = MediumVertex {
+                            p,
+                            d: ray.d,
+                            phase,
+                            medium,
+                        };
+                        if let Some((le, f, w)) = self.direct(&vertex, s) {
+                            l += thr * le * (f * w * inv_mis);
+                        }
                     }
                     let (wo, pdf) = phase.sample(ray.d, s.next_2d());
                     prev_pdf = pdf;
                     prev_p = p;
-                    specular = false;
+                    specular = !nee;
                     ray = Ray { o: p, d: wo };
                     start = SegmentStart::Medium;
                     t_max = f32::INFINITY;

@@ -125,12 +125,14 @@ impl Medium {
                 sigma_t,
                 albedo,
                 phase,
+                ..
             } => homogeneous(from_rgb(*sigma_t), *albedo, phase),
             MediumDesc::Heterogeneous {
                 sigma_t: VolumeDesc::Constant(s),
                 albedo,
                 scale,
                 phase,
+                ..
             } => {
                 // As in Mitsuba 3, the medium exists only inside the bounding
                 // box of its sigma_t volume, and a constant (a float, an rgb or
@@ -145,6 +147,7 @@ impl Medium {
                 albedo,
                 scale,
                 phase,
+                ..
             } => {
                 let m = grid::GridMedium::new(g, albedo, *scale, Phase::from_desc(phase), index)?;
                 Ok(Medium::Grid(Box::new(m)))

@@ -12,7 +12,7 @@
 //! | both | `sigma_t` | float or rgb; `heterogeneous`: or a nested `volume` | 1/length | ≥ 0 | 1 | extinction, times `scale` |
 //! | both | `albedo` | float or rgb; `heterogeneous`: or a nested `volume` | – | in [0, 1] | 0.75 | single-scattering albedo |
 //! | both | `scale` | float | – | ≥ 0 | 1 | multiplies `sigma_t` |
-//! | both | `sample_emitters` | boolean | – | – | true | accepted; it does not change the expected image |
+//! | both | `sample_emitters` | boolean | – | – | true | next-event estimation at scattering events in the medium; `false`: phase sampling alone there, and emission found after such an event counts fully (as in Mitsuba); the expected image is the same |
 //! | both | `has_spectral_extinction` | boolean | – | – | true | accepted; in Mitsuba's RGB variants it does not change the expected image (fgf always samples an RGB `sigma_t` per channel) |
 //! | both | nested `phase` | – | – | one, see [`super::phase`] | isotropic | |
 //!
@@ -135,7 +135,7 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
         "homogeneous" => {
             let sigma_t = constant_of(ctx, &p, "sigma_t", 1.0, NON_NEGATIVE)?;
             let albedo = volumes::volume_of(ctx, &p, "albedo", 0.75, UNIT)?;
-            p.bool_or("sample_emitters", true)?;
+            let sample_emitters = p.bool_or("sample_emitters", true)?;
             p.bool_or("has_spectral_extinction", true)?;
             let sigma_t = sigma_t.map(|c| c * scale);
             if sigma_t.iter().any(|&c| c > f32::MAX as f64) {
@@ -149,6 +149,7 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
                     sigma_t: rgb(sigma_t),
                     albedo,
                     phase,
+                    sample_emitters,
                 },
                 // A 3D texture albedo (Mitsuba evaluates it at each
                 // scattering point): the same transport as a heterogeneous
@@ -161,19 +162,21 @@ fn medium_desc<'a>(ctx: &mut Ctx<'a>, n: &'a XNode) -> Result<MediumDesc, SceneE
                     albedo,
                     scale: 1.0,
                     phase,
+                    sample_emitters,
                 },
             }
         }
         "heterogeneous" => {
             let sigma_t = volumes::volume_of(ctx, &p, "sigma_t", 1.0, NON_NEGATIVE)?;
             let albedo = volumes::volume_of(ctx, &p, "albedo", 0.75, UNIT)?;
-            p.bool_or("sample_emitters", true)?;
+            let sample_emitters = p.bool_or("sample_emitters", true)?;
             p.bool_or("has_spectral_extinction", true)?;
             MediumDesc::Heterogeneous {
                 sigma_t,
                 albedo,
                 scale: scale as f32,
                 phase,
+                sample_emitters,
             }
         }
         _ => nonexp::nonexponential(ctx, n, &p, ty, scale, phase)?,
