@@ -18,7 +18,8 @@
 //! once a hit is nearer than their boxes) took 17 % off the render's
 //! instructions against the binary tree visited in split-axis order.
 
-use glam::{Vec3, Vec3A, Vec4};
+use super::lanes8::F8;
+use glam::{Vec3, Vec3A};
 
 /// Axis-aligned bounding box.
 #[derive(Debug, Clone, Copy)]
@@ -100,19 +101,23 @@ impl Node {
     }
 }
 
-/// A node of the 4-wide tree: the boxes of up to 4 children, one SIMD
-/// lane each, so that one slab test on `Vec4`s tests them all.
+/// The width of the tree: children per node.
+const WIDTH: usize = 8;
+
+/// A node of the 8-wide tree: the boxes of up to 8 children, one SIMD
+/// lane each, so that one slab test on [`F8`]s tests them all. Lanes
+/// without a child hold an empty box (lower bounds +∞, upper −∞), which
+/// no ray hits: its entry distance is +∞ and its exit −∞ whatever the
+/// direction (no NaN: the bounds are infinite, never equal to the origin).
 #[derive(Debug, Clone, Copy)]
-struct Node4 {
+struct Node8 {
     /// Lower x, y, z then upper x, y, z bounds of the children.
-    bounds: [Vec4; 6],
-    /// Per lane: a [`Node4`] index, or a leaf (`LEAF` set; see [`leaf_ref`]).
-    child: [u32; 4],
-    /// Lanes that hold a child.
-    mask: u32,
+    bounds: [F8; 6],
+    /// Per lane: a [`Node8`] index, or a leaf (`LEAF` set; see [`leaf_ref`]).
+    child: [u32; WIDTH],
 }
 
-/// Marks a child reference of a [`Node4`] as a leaf.
+/// Marks a child reference of a [`Node8`] as a leaf.
 const LEAF: u32 = 1 << 31;
 /// Stack entries of the traversal on the stack (deeper trees, which only
 /// degenerate inputs make, get a heap stack).
@@ -136,7 +141,7 @@ fn leaf_range(r: u32) -> (u32, u32) {
 /// [`Bvh::build`] returns.
 #[derive(Debug, Clone)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node8>,
     /// The primitive range (start, count) of a root that is a leaf; count
     /// 0 if the root is `nodes[0]` or there are no primitives.
     root_leaf: (u32, u32),
@@ -199,16 +204,17 @@ impl Bvh {
         (bvh, padded)
     }
 
-    /// Add the 4-wide node of the binary interior node `idx` and those of
+    /// Add the 8-wide node of the binary interior node `idx` and those of
     /// its subtree. Its children are the binary node's grandchildren and so
-    /// on, the interior one of largest area opened first, until there are 4
+    /// on, the interior one of largest area opened first, until there are 8
     /// or only leaves. Returns the most stack entries a traversal of the
     /// subtree needs (a node pushes all but one of its children).
     fn collapse(&mut self, nodes: &[Node], idx: usize) -> usize {
         let second = |i: usize| nodes[i].offset as usize;
-        let mut kids = [idx + 1, second(idx), 0, 0];
+        let mut kids = [0usize; WIDTH];
+        (kids[0], kids[1]) = (idx + 1, second(idx));
         let mut n = 2;
-        while n < 4 {
+        while n < WIDTH {
             let open = (0..n)
                 .filter(|&k| nodes[kids[k]].count == 0)
                 .max_by(|&a, &b| nodes[kids[a]].area().total_cmp(&nodes[kids[b]].area()));
@@ -219,19 +225,18 @@ impl Bvh {
             n += 1;
         }
         let slot = self.nodes.len();
-        let mut lo = [[0f32; 4]; 3];
-        let mut hi = [[0f32; 4]; 3];
-        let mut child = [0u32; 4];
+        let mut lo = [[f32::INFINITY; WIDTH]; 3];
+        let mut hi = [[f32::NEG_INFINITY; WIDTH]; 3];
+        let mut child = [0u32; WIDTH];
         for (lane, &k) in kids[..n].iter().enumerate() {
             for a in 0..3 {
                 lo[a][lane] = nodes[k].min[a];
                 hi[a][lane] = nodes[k].max[a];
             }
         }
-        self.nodes.push(Node4 {
-            bounds: [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(Vec4::from_array),
+        self.nodes.push(Node8 {
+            bounds: [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(F8::from_array),
             child,
-            mask: (1 << n) - 1,
         });
         let mut deepest = 0;
         for (lane, &k) in kids[..n].iter().enumerate() {
@@ -310,7 +315,7 @@ impl Bvh {
         self.walk(&mut vec![(0, 0.0); self.stack_need], o, inv_d, t_max, hit)
     }
 
-    /// The traversal of the 4-wide tree from its root, with `stack` for
+    /// The traversal of the 8-wide tree from its root, with `stack` for
     /// the children still to visit and the distances where the ray enters
     /// their boxes.
     #[inline(never)]
@@ -322,18 +327,15 @@ impl Bvh {
         mut t_max: f32,
         hit: &mut impl FnMut(u32, u32, f32) -> f32,
     ) -> f32 {
-        let o = [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)];
-        let inv = [
-            Vec4::splat(inv_d.x),
-            Vec4::splat(inv_d.y),
-            Vec4::splat(inv_d.z),
-        ];
+        let o = [F8::splat(o.x), F8::splat(o.y), F8::splat(o.z)];
+        let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
         // Per axis, the bounds a ray enters by (the lower ones unless the
         // direction is negative along it) and those it leaves by. (Written
         // out: `array::map` is not always inlined.)
         let (nx, ny, nz) = (inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0);
         let near = [3 * nx as usize, 1 + 3 * ny as usize, 2 + 3 * nz as usize];
         let far = [3 * !nx as usize, 1 + 3 * !ny as usize, 2 + 3 * !nz as usize];
+        let (zero, widen) = (F8::splat(0.0), F8::splat(1.000_000_4));
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
@@ -346,15 +348,15 @@ impl Bvh {
             } else {
                 let node = &self.nodes[cur as usize];
                 let b = &node.bounds;
-                // The slab test of `slab_hit` on 4 boxes. A NaN distance (a
+                // The slab test of `slab_hit` on 8 boxes. A NaN distance (a
                 // zero direction component, the origin on a slab plane) is
                 // the first operand of `max`/`min`, which then return the
-                // second (SSE semantics): that slab is ignored, a
-                // conservative hit.
-                let t = |i: usize, a: usize| (b[i] - o[a]) * inv[a];
-                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(Vec4::ZERO)));
-                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(Vec4::splat(t_max))));
-                let mut mask = tn.cmple(tf * 1.000_000_4).bitmask() & node.mask;
+                // second (see `F8`): that slab is ignored, a conservative
+                // hit.
+                let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
+                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
+                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
+                let mut mask = tn.le_mask(tf.mul(widen));
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
@@ -363,7 +365,7 @@ impl Bvh {
                     // Sort the children hit by entry distance, farthest
                     // first; push all but the nearest, visit that one next.
                     let tn = tn.to_array();
-                    let mut hits = [(0f32, 0u32); 4];
+                    let mut hits = [(0f32, 0u32); WIDTH];
                     let mut n = 0;
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;

@@ -29,6 +29,7 @@
 mod build;
 pub mod bvh;
 mod frame;
+mod lanes8;
 mod pack;
 mod query;
 mod sample;
