@@ -158,7 +158,7 @@ const BINS: usize = 12;
 /// With 4-wide nodes, 2 packs rather than 4 made the render of a
 /// 120,000-triangle mesh 3 % cheaper in instructions; the reference cubes'
 /// 8 primitives stay one leaf.
-pub const PACK: usize = 4;
+pub const PACK: usize = 8;
 const MAX_LEAF: usize = 8;
 /// Cost of visiting a node (slab test, stack, branch) relative to one 4-wide
 /// pack test. Measured, not derived: 2 made renders faster than 0.5 or 1 both

@@ -60,6 +60,33 @@ mod avx {
         pub fn max(self, b: F8) -> F8 {
             F8(unsafe { _mm256_max_ps(self.0, b.0) })
         }
+        #[inline(always)]
+        pub fn add(self, b: F8) -> F8 {
+            F8(unsafe { _mm256_add_ps(self.0, b.0) })
+        }
+        #[inline(always)]
+        pub fn div(self, b: F8) -> F8 {
+            F8(unsafe { _mm256_div_ps(self.0, b.0) })
+        }
+        /// All bits set in lanes where `self <= b` (false for NaN); use
+        /// with [`Self::and`] and [`Self::bitmask`].
+        #[inline(always)]
+        pub fn le(self, b: F8) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, b.0) })
+        }
+        #[inline(always)]
+        pub fn lt(self, b: F8) -> F8 {
+            F8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, b.0) })
+        }
+        #[inline(always)]
+        pub fn and(self, b: F8) -> F8 {
+            F8(unsafe { _mm256_and_ps(self.0, b.0) })
+        }
+        /// The sign bits of the lanes (of a comparison: where it holds).
+        #[inline(always)]
+        pub fn bitmask(self) -> u32 {
+            (unsafe { _mm256_movemask_ps(self.0) }) as u32
+        }
         /// Bit `i` set where lane `i` of `self` is `<= b` (false for NaN).
         #[inline(always)]
         pub fn le_mask(self, b: F8) -> u32 {
@@ -76,6 +103,9 @@ mod pairs {
 
     #[derive(Clone, Copy, Debug)]
     pub(in super::super) struct F8([Vec4; 2]);
+
+    /// All bits set: a lane where a comparison holds.
+    const ONES: Vec4 = Vec4::splat(f32::from_bits(u32::MAX));
 
     impl F8 {
         #[inline(always)]
@@ -114,6 +144,38 @@ mod pairs {
         pub fn max(self, b: F8) -> F8 {
             let m = |x: Vec4, y: Vec4| Vec4::select(x.cmpgt(y), x, y);
             F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
+        }
+        #[inline(always)]
+        pub fn add(self, b: F8) -> F8 {
+            F8([self.0[0] + b.0[0], self.0[1] + b.0[1]])
+        }
+        #[inline(always)]
+        pub fn div(self, b: F8) -> F8 {
+            F8([self.0[0] / b.0[0], self.0[1] / b.0[1]])
+        }
+        #[inline(always)]
+        pub fn le(self, b: F8) -> F8 {
+            let m = |x: Vec4, y: Vec4| Vec4::select(x.cmple(y), ONES, Vec4::ZERO);
+            F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
+        }
+        #[inline(always)]
+        pub fn lt(self, b: F8) -> F8 {
+            let m = |x: Vec4, y: Vec4| Vec4::select(x.cmplt(y), ONES, Vec4::ZERO);
+            F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
+        }
+        #[inline(always)]
+        pub fn and(self, b: F8) -> F8 {
+            let m = |x: Vec4, y: Vec4| {
+                Vec4::from_array(std::array::from_fn(|i| {
+                    f32::from_bits(x[i].to_bits() & y[i].to_bits())
+                }))
+            };
+            F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
+        }
+        #[inline(always)]
+        pub fn bitmask(self) -> u32 {
+            let m = |x: Vec4| x.is_negative_bitmask();
+            m(self.0[0]) | m(self.0[1]) << 4
         }
         #[inline(always)]
         pub fn le_mask(self, b: F8) -> u32 {
@@ -166,6 +228,14 @@ mod tests {
             assert_eq!(bits(fa.min(fb).to_array()), bits(pa.min(pb).to_array()));
             assert_eq!(bits(fa.max(fb).to_array()), bits(pa.max(pb).to_array()));
             assert_eq!(fa.le_mask(fb), pa.le_mask(pb));
+            assert_eq!(bits(fa.add(fb).to_array()), bits(pa.add(pb).to_array()));
+            assert_eq!(bits(fa.div(fb).to_array()), bits(pa.div(pb).to_array()));
+            assert_eq!(bits(fa.le(fb).to_array()), bits(pa.le(pb).to_array()));
+            assert_eq!(bits(fa.lt(fb).to_array()), bits(pa.lt(pb).to_array()));
+            let (m, pm) = (fa.le(fb).and(fb.lt(fa)), pa.le(pb).and(pb.lt(pa)));
+            assert_eq!(bits(m.to_array()), bits(pm.to_array()));
+            assert_eq!(fa.bitmask(), pa.bitmask());
+            assert_eq!(fa.le(fb).bitmask(), fa.le_mask(fb));
             // The NaN rule itself: the second operand.
             for l in 0..8 {
                 let (x, y) = (a[l], b[l]);
