@@ -1,22 +1,25 @@
 //! A bounding volume hierarchy over every primitive of the scene (triangles
 //! of all meshes, spheres, disks): a binned surface-area-heuristic build
-//! (12 bins per axis, leaves of at most 8 primitives, tested in
-//! SIMD packs of 4, with the SAH cost counted in packs), collapsed into a
-//! 4-wide tree whose nodes hold their children's boxes in SIMD form, and
-//! traversed nearest child first with a small stack.
+//! (12 bins per axis, leaves of at most 8 primitives, tested as one SIMD
+//! pack of 8, with the SAH cost counted in packs), collapsed into an
+//! 8-wide tree whose nodes hold their children's boxes in SIMD form
+//! ([`F8`]: AVX, or two SSE halves in a portable build), and traversed
+//! nearest child first with a small stack.
 //!
 //! We wrote our own rather than depend on a crate: it is a few hundred
-//! lines without unsafe code, its leaves mix triangles with analytic spheres
-//! and disks, and it tests leaf triangles 4 at a time (`TriPack` in
-//! `geometry/pack.rs`), which is what matters for scenes of a handful of
-//! primitives like the reference ones. On the homogeneous reference scene,
-//! SIMD slab tests and 4-wide leaf packs made the whole renderer 15 % faster
-//! than per-triangle tests; counting a node visit as 2 pack tests in the SAH
-//! (one leaf for its 8 primitives) another 9 % (see `docs/benchmarks.md`).
-//! On a 120,000-triangle mesh, the 4-wide nodes (one SIMD slab test for
-//! four boxes, the children visited by entry distance, pending ones skipped
-//! once a hit is nearer than their boxes) took 17 % off the render's
-//! instructions against the binary tree visited in split-axis order.
+//! lines, its leaves mix triangles with analytic spheres and disks, and it
+//! tests leaf triangles 8 at a time (`TriPack` in `geometry/pack.rs`),
+//! which is what matters for scenes of a handful of primitives like the
+//! reference ones. On the homogeneous reference scene, SIMD slab tests and
+//! 4-wide leaf packs made the whole renderer 15 % faster than per-triangle
+//! tests; counting a node visit as 2 pack tests in the SAH (one leaf for
+//! its 8 primitives) another 9 %, and one 8-wide pack instead of two 4-wide
+//! ones another 9.6 % of its instructions (see `docs/benchmarks.md`). On a
+//! 120,000-triangle mesh, 4-wide nodes (one SIMD slab test for four boxes,
+//! the children visited by entry distance, pending ones skipped once a hit
+//! is nearer than their boxes) took 17 % off the render's instructions
+//! against the binary tree visited in split-axis order; 8-wide nodes
+//! another 4.4 %, 8-wide leaf packs 3.4 % more.
 
 use super::lanes8::F8;
 use glam::{Vec3, Vec3A};
@@ -153,11 +156,12 @@ pub struct Bvh {
 }
 
 const BINS: usize = 12;
-/// Leaves are tested in SIMD packs of 4 primitives; a leaf holds at most
-/// `MAX_LEAF` (2 packs) and the SAH counts cost in packs, not primitives.
-/// With 4-wide nodes, 2 packs rather than 4 made the render of a
-/// 120,000-triangle mesh 3 % cheaper in instructions; the reference cubes'
-/// 8 primitives stay one leaf.
+/// Leaves are tested in SIMD packs of 8 primitives; a leaf holds at most
+/// `MAX_LEAF` (one pack) and the SAH counts cost in packs, not primitives.
+/// (With 4-wide packs, leaves of 2 packs rather than 4 made the render of
+/// a 120,000-triangle mesh 3 % cheaper in instructions, and one 8-wide
+/// pack rather than 2 of 4 another 3.4 %.) The reference cubes' 8
+/// primitives stay one leaf.
 pub const PACK: usize = 8;
 const MAX_LEAF: usize = 8;
 /// Cost of visiting a node (slab test, stack, branch) relative to one 4-wide
@@ -612,5 +616,65 @@ mod tests {
             };
             assert_eq!(leaves(&bvh), leaves(&deep));
         }
+    }
+
+    /// The 8-wide tree over thousands of boxes (several levels of full
+    /// nodes): every box the ray crosses before `t_max` is visited, for
+    /// random rays and for rays along an axis (zero direction components)
+    /// starting on a box's corner (origin on slab planes).
+    #[test]
+    fn wide_traversal_visits_every_hit_box() {
+        let mut s = crate::math::Sampler::new(17, 0, 0);
+        let mut r3 = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let boxes: Vec<Aabb> = (0..5000)
+            .map(|_| {
+                let c = r3() * 20.0;
+                let h = r3() * 0.4;
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let (bvh, order) = Bvh::build(&boxes);
+        assert!(
+            bvh.nodes.len() > 1 + WIDTH,
+            "the tree should be several levels deep"
+        );
+        let full = bvh.nodes.iter().filter(|n| n.child[WIDTH - 1] != 0).count();
+        assert!(full > 0, "some nodes should have {WIDTH} children");
+        let mut visits = 0;
+        for k in 0..2000 {
+            let (o, d) = if k % 2 == 0 {
+                (
+                    r3() * 20.0,
+                    crate::math::sample_uniform_sphere([r3().x, r3().y]),
+                )
+            } else {
+                let b = boxes[k * 7 % boxes.len()];
+                let mut d = Vec3::ZERO;
+                d[k / 2 % 3] = if k / 6 % 2 == 0 { 1.0 } else { -1.0 };
+                (if k % 4 == 1 { b.min } else { b.max }, d)
+            };
+            let t_max = if k % 3 == 0 {
+                f32::INFINITY
+            } else {
+                15.0 * r3().x
+            };
+            let mut visited = vec![false; boxes.len()];
+            bvh.traverse_leaves(o, d, t_max, |start, count, t| {
+                for p in order[start as usize..(start + count) as usize].iter() {
+                    visited[p.expect("no padding inside a leaf") as usize] = true;
+                }
+                t
+            });
+            for (i, b) in boxes.iter().enumerate() {
+                if b.intersect(o, d.recip(), t_max).is_some() {
+                    visits += 1;
+                    assert!(visited[i], "ray {k}: box {i} missed");
+                }
+            }
+        }
+        assert!(visits > 2000, "the rays should hit boxes ({visits})");
     }
 }
