@@ -164,10 +164,13 @@ const BINS: usize = 12;
 /// primitives stay one leaf.
 pub const PACK: usize = 8;
 const MAX_LEAF: usize = 8;
-/// Cost of visiting a node (slab test, stack, branch) relative to one 4-wide
-/// pack test. Measured, not derived: 2 made renders faster than 0.5 or 1 both
-/// on the reference scenes (+9 %: their 8 primitives become one leaf of two
-/// packs instead of three leaves) and on an 80k-triangle mesh (+5 %).
+/// Cost of visiting a node (slab test, stack, branch) relative to one pack
+/// test. Measured with 4-wide packs, not derived: 2 made renders faster than
+/// 0.5 or 1 both on the reference scenes (+9 %: their 8 primitives become
+/// one leaf of two packs instead of three leaves) and on an 80k-triangle
+/// mesh (+5 %). With `PACK == MAX_LEAF` it decides nothing (a node of at
+/// most one pack is always a leaf, a larger one always split; 1 and 2 give
+/// the same tree); it matters again if leaves may hold several packs.
 const TRAVERSAL_COST: f32 = 2.0;
 
 #[inline]
