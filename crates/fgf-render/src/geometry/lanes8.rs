@@ -68,29 +68,37 @@ mod avx {
         pub fn div(self, b: F8) -> F8 {
             F8(unsafe { _mm256_div_ps(self.0, b.0) })
         }
-        /// All bits set in lanes where `self <= b` (false for NaN); use
-        /// with [`Self::and`] and [`Self::bitmask`].
+        /// The lanes where `self <= b` (false for NaN).
         #[inline(always)]
-        pub fn le(self, b: F8) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, b.0) })
+        pub fn le(self, b: F8) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_LE_OQ>(self.0, b.0) })
         }
+        /// The lanes where `self < b` (false for NaN).
         #[inline(always)]
-        pub fn lt(self, b: F8) -> F8 {
-            F8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, b.0) })
-        }
-        #[inline(always)]
-        pub fn and(self, b: F8) -> F8 {
-            F8(unsafe { _mm256_and_ps(self.0, b.0) })
-        }
-        /// The sign bits of the lanes (of a comparison: where it holds).
-        #[inline(always)]
-        pub fn bitmask(self) -> u32 {
-            (unsafe { _mm256_movemask_ps(self.0) }) as u32
+        pub fn lt(self, b: F8) -> M8 {
+            M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, b.0) })
         }
         /// Bit `i` set where lane `i` of `self` is `<= b` (false for NaN).
         #[inline(always)]
         pub fn le_mask(self, b: F8) -> u32 {
             (unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, b.0)) }) as u32
+        }
+    }
+
+    /// A lane mask, the result of a comparison.
+    #[derive(Clone, Copy, Debug)]
+    #[repr(transparent)]
+    pub(in super::super) struct M8(__m256);
+
+    impl M8 {
+        #[inline(always)]
+        pub fn and(self, b: M8) -> M8 {
+            M8(unsafe { _mm256_and_ps(self.0, b.0) })
+        }
+        /// Bit `i` set where lane `i` holds.
+        #[inline(always)]
+        pub fn bitmask(self) -> u32 {
+            (unsafe { _mm256_movemask_ps(self.0) }) as u32
         }
     }
 }
@@ -99,13 +107,25 @@ mod avx {
 /// with the AVX one).
 #[cfg_attr(all(target_arch = "x86_64", target_feature = "avx"), allow(dead_code))]
 mod pairs {
-    use glam::Vec4;
+    use glam::{BVec4A, Vec4};
 
     #[derive(Clone, Copy, Debug)]
     pub(in super::super) struct F8([Vec4; 2]);
 
-    /// All bits set: a lane where a comparison holds.
-    const ONES: Vec4 = Vec4::splat(f32::from_bits(u32::MAX));
+    /// A lane mask, the result of a comparison.
+    #[derive(Clone, Copy, Debug)]
+    pub(in super::super) struct M8([BVec4A; 2]);
+
+    impl M8 {
+        #[inline(always)]
+        pub fn and(self, b: M8) -> M8 {
+            M8([self.0[0] & b.0[0], self.0[1] & b.0[1]])
+        }
+        #[inline(always)]
+        pub fn bitmask(self) -> u32 {
+            self.0[0].bitmask() | self.0[1].bitmask() << 4
+        }
+    }
 
     impl F8 {
         #[inline(always)]
@@ -132,16 +152,22 @@ mod pairs {
         pub fn mul(self, b: F8) -> F8 {
             F8([self.0[0] * b.0[0], self.0[1] * b.0[1]])
         }
-        /// Lane minimum; `b` if either is NaN (glam's SSE `min` is `minps`;
-        /// written out so that other targets follow the same rule).
+        /// Lane minimum; `b` if either is NaN: `minps` (glam's SSE `min`) on
+        /// x86-64, written out elsewhere (NEON's `min` returns the NaN).
         #[inline(always)]
         pub fn min(self, b: F8) -> F8 {
+            #[cfg(target_arch = "x86_64")]
+            let m = |x: Vec4, y: Vec4| x.min(y);
+            #[cfg(not(target_arch = "x86_64"))]
             let m = |x: Vec4, y: Vec4| Vec4::select(x.cmplt(y), x, y);
             F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
         }
-        /// Lane maximum; `b` if either is NaN.
+        /// Lane maximum; `b` if either is NaN (`maxps` on x86-64).
         #[inline(always)]
         pub fn max(self, b: F8) -> F8 {
+            #[cfg(target_arch = "x86_64")]
+            let m = |x: Vec4, y: Vec4| x.max(y);
+            #[cfg(not(target_arch = "x86_64"))]
             let m = |x: Vec4, y: Vec4| Vec4::select(x.cmpgt(y), x, y);
             F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
         }
@@ -154,28 +180,12 @@ mod pairs {
             F8([self.0[0] / b.0[0], self.0[1] / b.0[1]])
         }
         #[inline(always)]
-        pub fn le(self, b: F8) -> F8 {
-            let m = |x: Vec4, y: Vec4| Vec4::select(x.cmple(y), ONES, Vec4::ZERO);
-            F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
+        pub fn le(self, b: F8) -> M8 {
+            M8([self.0[0].cmple(b.0[0]), self.0[1].cmple(b.0[1])])
         }
         #[inline(always)]
-        pub fn lt(self, b: F8) -> F8 {
-            let m = |x: Vec4, y: Vec4| Vec4::select(x.cmplt(y), ONES, Vec4::ZERO);
-            F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
-        }
-        #[inline(always)]
-        pub fn and(self, b: F8) -> F8 {
-            let m = |x: Vec4, y: Vec4| {
-                Vec4::from_array(std::array::from_fn(|i| {
-                    f32::from_bits(x[i].to_bits() & y[i].to_bits())
-                }))
-            };
-            F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
-        }
-        #[inline(always)]
-        pub fn bitmask(self) -> u32 {
-            let m = |x: Vec4| x.is_negative_bitmask();
-            m(self.0[0]) | m(self.0[1]) << 4
+        pub fn lt(self, b: F8) -> M8 {
+            M8([self.0[0].cmplt(b.0[0]), self.0[1].cmplt(b.0[1])])
         }
         #[inline(always)]
         pub fn le_mask(self, b: F8) -> u32 {
@@ -230,11 +240,10 @@ mod tests {
             assert_eq!(fa.le_mask(fb), pa.le_mask(pb));
             assert_eq!(bits(fa.add(fb).to_array()), bits(pa.add(pb).to_array()));
             assert_eq!(bits(fa.div(fb).to_array()), bits(pa.div(pb).to_array()));
-            assert_eq!(bits(fa.le(fb).to_array()), bits(pa.le(pb).to_array()));
-            assert_eq!(bits(fa.lt(fb).to_array()), bits(pa.lt(pb).to_array()));
+            assert_eq!(fa.le(fb).bitmask(), pa.le(pb).bitmask());
+            assert_eq!(fa.lt(fb).bitmask(), pa.lt(pb).bitmask());
             let (m, pm) = (fa.le(fb).and(fb.lt(fa)), pa.le(pb).and(pb.lt(pa)));
-            assert_eq!(bits(m.to_array()), bits(pm.to_array()));
-            assert_eq!(fa.bitmask(), pa.bitmask());
+            assert_eq!(m.bitmask(), pm.bitmask());
             assert_eq!(fa.le(fb).bitmask(), fa.le_mask(fb));
             // The NaN rule itself: the second operand.
             for l in 0..8 {
