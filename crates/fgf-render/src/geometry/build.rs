@@ -316,7 +316,7 @@ impl Builder {
     }
 
     /// The BVH over every primitive, the primitives stored in its leaf
-    /// order (each leaf starting a pack of 4) and the packs.
+    /// order (each leaf starting a pack of `bvh::PACK`) and the packs.
     fn finish(self) -> Geometry {
         let bounds: Vec<Aabb> = self.prims.iter().map(|&p| self.prim_bounds(p)).collect();
         let (bvh, order) = Bvh::build(&bounds);
@@ -326,7 +326,7 @@ impl Builder {
             .map(|i| i.map_or(PAD, |i| self.prims[i as usize]))
             .collect();
         let packs = prims
-            .chunks(4)
+            .chunks(super::bvh::PACK)
             .map(|chunk| TriPack::new(chunk, &self.tris))
             .collect();
         Geometry {

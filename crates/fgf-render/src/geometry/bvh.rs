@@ -1,24 +1,29 @@
 //! A bounding volume hierarchy over every primitive of the scene (triangles
 //! of all meshes, spheres, disks): a binned surface-area-heuristic build
-//! (12 bins per axis, leaves of at most 8 primitives, tested in
-//! SIMD packs of 4, with the SAH cost counted in packs), collapsed into a
-//! 4-wide tree whose nodes hold their children's boxes in SIMD form, and
-//! traversed nearest child first with a small stack.
+//! (12 bins per axis, leaves of at most 8 primitives, tested as one SIMD
+//! pack of 8, with the SAH cost counted in packs), collapsed into an
+//! 8-wide tree whose nodes hold their children's boxes in SIMD form
+//! ([`F8`]: AVX, or two SSE halves in a portable build), and traversed
+//! nearest child first with a small stack.
 //!
 //! We wrote our own rather than depend on a crate: it is a few hundred
-//! lines without unsafe code, its leaves mix triangles with analytic spheres
-//! and disks, and it tests leaf triangles 4 at a time (`TriPack` in
-//! `geometry/pack.rs`), which is what matters for scenes of a handful of
-//! primitives like the reference ones. On the homogeneous reference scene,
-//! SIMD slab tests and 4-wide leaf packs made the whole renderer 15 % faster
-//! than per-triangle tests; counting a node visit as 2 pack tests in the SAH
-//! (one leaf for its 8 primitives) another 9 % (see `docs/benchmarks.md`).
-//! On a 120,000-triangle mesh, the 4-wide nodes (one SIMD slab test for
-//! four boxes, the children visited by entry distance, pending ones skipped
-//! once a hit is nearer than their boxes) took 17 % off the render's
-//! instructions against the binary tree visited in split-axis order.
+//! lines, its leaves mix triangles with analytic spheres and disks, and it
+//! tests leaf triangles 8 at a time (`TriPack` in `geometry/pack.rs`),
+//! which is what matters for scenes of a handful of primitives like the
+//! reference ones. On the homogeneous reference scene, SIMD slab tests and
+//! 4-wide leaf packs made the whole renderer 15 % faster than per-triangle
+//! tests; counting a node visit as 2 pack tests in the SAH (one leaf for
+//! its 8 primitives) another 9 %, and one 8-wide pack instead of two 4-wide
+//! ones another 9.6 % of its instructions (see `docs/benchmarks.md`). On a
+//! 120,000-triangle mesh, 4-wide nodes (one SIMD slab test for four boxes,
+//! the children visited by entry distance, pending ones skipped once a hit
+//! is nearer than their boxes) took 17 % off the render's instructions
+//! against the binary tree visited in split-axis order; 8-wide nodes
+//! another 4.4 %, 8-wide leaf packs 3.4 % more, and a fast path for nodes
+//! with two children hit 2.6 % more.
 
-use glam::{Vec3, Vec3A, Vec4};
+use super::lanes8::F8;
+use glam::{Vec3, Vec3A};
 
 /// Axis-aligned bounding box.
 #[derive(Debug, Clone, Copy)]
@@ -100,19 +105,23 @@ impl Node {
     }
 }
 
-/// A node of the 4-wide tree: the boxes of up to 4 children, one SIMD
-/// lane each, so that one slab test on `Vec4`s tests them all.
+/// The width of the tree: children per node.
+const WIDTH: usize = 8;
+
+/// A node of the 8-wide tree: the boxes of up to 8 children, one SIMD
+/// lane each, so that one slab test on [`F8`]s tests them all. Lanes
+/// without a child hold an empty box (lower bounds +∞, upper −∞), which
+/// no ray hits: its entry distance is +∞ and its exit −∞ whatever the
+/// direction (no NaN: the bounds are infinite, never equal to the origin).
 #[derive(Debug, Clone, Copy)]
-struct Node4 {
+struct Node8 {
     /// Lower x, y, z then upper x, y, z bounds of the children.
-    bounds: [Vec4; 6],
-    /// Per lane: a [`Node4`] index, or a leaf (`LEAF` set; see [`leaf_ref`]).
-    child: [u32; 4],
-    /// Lanes that hold a child.
-    mask: u32,
+    bounds: [F8; 6],
+    /// Per lane: a [`Node8`] index, or a leaf (`LEAF` set; see [`leaf_ref`]).
+    child: [u32; WIDTH],
 }
 
-/// Marks a child reference of a [`Node4`] as a leaf.
+/// Marks a child reference of a [`Node8`] as a leaf.
 const LEAF: u32 = 1 << 31;
 /// Stack entries of the traversal on the stack (deeper trees, which only
 /// degenerate inputs make, get a heap stack).
@@ -136,7 +145,7 @@ fn leaf_range(r: u32) -> (u32, u32) {
 /// [`Bvh::build`] returns.
 #[derive(Debug, Clone)]
 pub struct Bvh {
-    nodes: Vec<Node4>,
+    nodes: Vec<Node8>,
     /// The primitive range (start, count) of a root that is a leaf; count
     /// 0 if the root is `nodes[0]` or there are no primitives.
     root_leaf: (u32, u32),
@@ -148,17 +157,21 @@ pub struct Bvh {
 }
 
 const BINS: usize = 12;
-/// Leaves are tested in SIMD packs of 4 primitives; a leaf holds at most
-/// `MAX_LEAF` (2 packs) and the SAH counts cost in packs, not primitives.
-/// With 4-wide nodes, 2 packs rather than 4 made the render of a
-/// 120,000-triangle mesh 3 % cheaper in instructions; the reference cubes'
-/// 8 primitives stay one leaf.
-pub const PACK: usize = 4;
+/// Leaves are tested in SIMD packs of 8 primitives; a leaf holds at most
+/// `MAX_LEAF` (one pack) and the SAH counts cost in packs, not primitives.
+/// (With 4-wide packs, leaves of 2 packs rather than 4 made the render of
+/// a 120,000-triangle mesh 3 % cheaper in instructions, and one 8-wide
+/// pack rather than 2 of 4 another 3.4 %.) The reference cubes' 8
+/// primitives stay one leaf.
+pub const PACK: usize = 8;
 const MAX_LEAF: usize = 8;
-/// Cost of visiting a node (slab test, stack, branch) relative to one 4-wide
-/// pack test. Measured, not derived: 2 made renders faster than 0.5 or 1 both
-/// on the reference scenes (+9 %: their 8 primitives become one leaf of two
-/// packs instead of three leaves) and on an 80k-triangle mesh (+5 %).
+/// Cost of visiting a node (slab test, stack, branch) relative to one pack
+/// test. Measured with 4-wide packs, not derived: 2 made renders faster than
+/// 0.5 or 1 both on the reference scenes (+9 %: their 8 primitives become
+/// one leaf of two packs instead of three leaves) and on an 80k-triangle
+/// mesh (+5 %). With `PACK == MAX_LEAF` it decides nothing (a node of at
+/// most one pack is always a leaf, a larger one always split; 1 and 2 give
+/// the same tree); it matters again if leaves may hold several packs.
 const TRAVERSAL_COST: f32 = 2.0;
 
 #[inline]
@@ -199,16 +212,17 @@ impl Bvh {
         (bvh, padded)
     }
 
-    /// Add the 4-wide node of the binary interior node `idx` and those of
+    /// Add the 8-wide node of the binary interior node `idx` and those of
     /// its subtree. Its children are the binary node's grandchildren and so
-    /// on, the interior one of largest area opened first, until there are 4
+    /// on, the interior one of largest area opened first, until there are 8
     /// or only leaves. Returns the most stack entries a traversal of the
     /// subtree needs (a node pushes all but one of its children).
     fn collapse(&mut self, nodes: &[Node], idx: usize) -> usize {
         let second = |i: usize| nodes[i].offset as usize;
-        let mut kids = [idx + 1, second(idx), 0, 0];
+        let mut kids = [0usize; WIDTH];
+        (kids[0], kids[1]) = (idx + 1, second(idx));
         let mut n = 2;
-        while n < 4 {
+        while n < WIDTH {
             let open = (0..n)
                 .filter(|&k| nodes[kids[k]].count == 0)
                 .max_by(|&a, &b| nodes[kids[a]].area().total_cmp(&nodes[kids[b]].area()));
@@ -219,19 +233,18 @@ impl Bvh {
             n += 1;
         }
         let slot = self.nodes.len();
-        let mut lo = [[0f32; 4]; 3];
-        let mut hi = [[0f32; 4]; 3];
-        let mut child = [0u32; 4];
+        let mut lo = [[f32::INFINITY; WIDTH]; 3];
+        let mut hi = [[f32::NEG_INFINITY; WIDTH]; 3];
+        let mut child = [0u32; WIDTH];
         for (lane, &k) in kids[..n].iter().enumerate() {
             for a in 0..3 {
                 lo[a][lane] = nodes[k].min[a];
                 hi[a][lane] = nodes[k].max[a];
             }
         }
-        self.nodes.push(Node4 {
-            bounds: [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(Vec4::from_array),
+        self.nodes.push(Node8 {
+            bounds: [lo[0], lo[1], lo[2], hi[0], hi[1], hi[2]].map(F8::from_array),
             child,
-            mask: (1 << n) - 1,
         });
         let mut deepest = 0;
         for (lane, &k) in kids[..n].iter().enumerate() {
@@ -310,7 +323,7 @@ impl Bvh {
         self.walk(&mut vec![(0, 0.0); self.stack_need], o, inv_d, t_max, hit)
     }
 
-    /// The traversal of the 4-wide tree from its root, with `stack` for
+    /// The traversal of the 8-wide tree from its root, with `stack` for
     /// the children still to visit and the distances where the ray enters
     /// their boxes.
     #[inline(never)]
@@ -322,18 +335,15 @@ impl Bvh {
         mut t_max: f32,
         hit: &mut impl FnMut(u32, u32, f32) -> f32,
     ) -> f32 {
-        let o = [Vec4::splat(o.x), Vec4::splat(o.y), Vec4::splat(o.z)];
-        let inv = [
-            Vec4::splat(inv_d.x),
-            Vec4::splat(inv_d.y),
-            Vec4::splat(inv_d.z),
-        ];
+        let o = [F8::splat(o.x), F8::splat(o.y), F8::splat(o.z)];
+        let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
         // Per axis, the bounds a ray enters by (the lower ones unless the
         // direction is negative along it) and those it leaves by. (Written
         // out: `array::map` is not always inlined.)
         let (nx, ny, nz) = (inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0);
         let near = [3 * nx as usize, 1 + 3 * ny as usize, 2 + 3 * nz as usize];
         let far = [3 * !nx as usize, 1 + 3 * !ny as usize, 2 + 3 * !nz as usize];
+        let (zero, widen) = (F8::splat(0.0), F8::splat(1.000_000_4));
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
@@ -346,24 +356,39 @@ impl Bvh {
             } else {
                 let node = &self.nodes[cur as usize];
                 let b = &node.bounds;
-                // The slab test of `slab_hit` on 4 boxes. A NaN distance (a
+                // The slab test of `slab_hit` on 8 boxes. A NaN distance (a
                 // zero direction component, the origin on a slab plane) is
                 // the first operand of `max`/`min`, which then return the
-                // second (SSE semantics): that slab is ignored, a
-                // conservative hit.
-                let t = |i: usize, a: usize| (b[i] - o[a]) * inv[a];
-                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(Vec4::ZERO)));
-                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(Vec4::splat(t_max))));
-                let mut mask = tn.cmple(tf * 1.000_000_4).bitmask() & node.mask;
+                // second (see `F8`): that slab is ignored, a conservative
+                // hit.
+                let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
+                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
+                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
+                let mut mask = tn.le_mask(tf.mul(widen));
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];
                         continue;
                     }
+                    let tn = tn.to_array();
+                    // Two children (the commonest case): visit the nearer,
+                    // push the other; on a tie the higher lane is visited
+                    // first, as by the sort below.
+                    let rest = mask & (mask - 1);
+                    if rest & (rest - 1) == 0 {
+                        let (l0, l1) = (
+                            mask.trailing_zeros() as usize,
+                            rest.trailing_zeros() as usize,
+                        );
+                        let (near, far) = if tn[l0] < tn[l1] { (l0, l1) } else { (l1, l0) };
+                        stack[sp] = (node.child[far], tn[far]);
+                        sp += 1;
+                        cur = node.child[near];
+                        continue;
+                    }
                     // Sort the children hit by entry distance, farthest
                     // first; push all but the nearest, visit that one next.
-                    let tn = tn.to_array();
-                    let mut hits = [(0f32, 0u32); 4];
+                    let mut hits = [(0f32, 0u32); WIDTH];
                     let mut n = 0;
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
@@ -610,5 +635,65 @@ mod tests {
             };
             assert_eq!(leaves(&bvh), leaves(&deep));
         }
+    }
+
+    /// The 8-wide tree over thousands of boxes (several levels of full
+    /// nodes): every box the ray crosses before `t_max` is visited, for
+    /// random rays and for rays along an axis (zero direction components)
+    /// starting on a box's corner (origin on slab planes).
+    #[test]
+    fn wide_traversal_visits_every_hit_box() {
+        let mut s = crate::math::Sampler::new(17, 0, 0);
+        let mut r3 = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let boxes: Vec<Aabb> = (0..5000)
+            .map(|_| {
+                let c = r3() * 20.0;
+                let h = r3() * 0.4;
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let (bvh, order) = Bvh::build(&boxes);
+        assert!(
+            bvh.nodes.len() > 1 + WIDTH,
+            "the tree should be several levels deep"
+        );
+        let full = bvh.nodes.iter().filter(|n| n.child[WIDTH - 1] != 0).count();
+        assert!(full > 0, "some nodes should have {WIDTH} children");
+        let mut visits = 0;
+        for k in 0..2000 {
+            let (o, d) = if k % 2 == 0 {
+                (
+                    r3() * 20.0,
+                    crate::math::sample_uniform_sphere([r3().x, r3().y]),
+                )
+            } else {
+                let b = boxes[k * 7 % boxes.len()];
+                let mut d = Vec3::ZERO;
+                d[k / 2 % 3] = if k / 6 % 2 == 0 { 1.0 } else { -1.0 };
+                (if k % 4 == 1 { b.min } else { b.max }, d)
+            };
+            let t_max = if k % 3 == 0 {
+                f32::INFINITY
+            } else {
+                15.0 * r3().x
+            };
+            let mut visited = vec![false; boxes.len()];
+            bvh.traverse_leaves(o, d, t_max, |start, count, t| {
+                for p in order[start as usize..(start + count) as usize].iter() {
+                    visited[p.expect("no padding inside a leaf") as usize] = true;
+                }
+                t
+            });
+            for (i, b) in boxes.iter().enumerate() {
+                if b.intersect(o, d.recip(), t_max).is_some() {
+                    visits += 1;
+                    assert!(visited[i], "ray {k}: box {i} missed");
+                }
+            }
+        }
+        assert!(visits > 2000, "the rays should hit boxes ({visits})");
     }
 }

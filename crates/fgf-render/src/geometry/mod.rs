@@ -13,7 +13,8 @@
 //!
 //! * `types`: hits and primitives;
 //! * `build`: [`Geometry::build`], validation and compilation of the shapes;
-//! * [`bvh`]: the hierarchy; `pack`: the 4-wide leaf test;
+//! * [`bvh`]: the hierarchy; `pack`: the 8-wide leaf test; `lanes8`: its
+//!   8-lane vectors;
 //! * `query`: [`Geometry::intersect`], [`Geometry::intersect2`],
 //!   [`Geometry::for_each_hit`]; `sample`: [`Geometry::sample_shape`];
 //!   `uv`: [`Geometry::uv`], a hit's texture coordinates, computed only
@@ -29,6 +30,7 @@
 mod build;
 pub mod bvh;
 mod frame;
+mod lanes8;
 mod pack;
 mod query;
 mod sample;
@@ -56,9 +58,9 @@ pub struct Geometry {
     sphere_to_local: Vec<Mat3>,
     disks: Vec<Disk>,
     /// Primitive references in BVH leaf order, each leaf starting at a
-    /// multiple of 4 (padded with `types::PAD`).
+    /// multiple of `bvh::PACK` (padded with `types::PAD`).
     prims: Vec<u32>,
-    /// `packs[k]` holds the triangles among `prims[4k..4k+4]` for 4-wide tests.
+    /// `packs[k]` holds the triangles among `prims[8k..8k+8]` for 8-wide tests.
     packs: Vec<TriPack>,
     bvh: Bvh,
     sampling: Vec<ShapeSampling>,

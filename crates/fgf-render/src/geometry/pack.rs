@@ -1,13 +1,14 @@
-//! The 4-wide leaf test: the triangles of a BVH leaf are stored in packs
-//! of 4 and intersected at once (the leaves start at multiples of
+//! The 8-wide leaf test: the triangles of a BVH leaf are stored in a pack
+//! of 8 and intersected at once (the leaves start at multiples of
 //! [`super::bvh::PACK`]).
 
+use super::bvh::PACK;
+use super::lanes8::F8;
 use super::types::{Tri, INDEX_MASK, KIND_SHIFT, KIND_TRI, PAD};
 use crate::ray::Ray;
-use glam::Vec4;
 
-/// Four triangles in structure-of-arrays form, intersected at once with
-/// SSE (glam's `Vec4`) by projection onto precomputed planes: with
+/// Eight triangles in structure-of-arrays form, intersected at once with
+/// AVX ([`F8`]; two SSE halves in a portable build) by projection onto precomputed planes: with
 /// `N = e1 × e2`, a point `P` of the plane is `v0 + u e1 + v e2` for
 /// `u = (P - v0)·a`, `v = (P - v0)·b`, where `a = (e2 × N)/|N|²` and
 /// `b = (N × e1)/|N|²`. That is about 35 operations per pack against
@@ -16,29 +17,29 @@ use glam::Vec4;
 /// hit.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct TriPack {
-    v0: [Vec4; 3],
-    n: [Vec4; 3],
-    a: [Vec4; 3],
-    b: [Vec4; 3],
+    v0: [F8; 3],
+    n: [F8; 3],
+    a: [F8; 3],
+    b: [F8; 3],
     /// Per lane: 1 for a triangle (`u + v ≤ 1`), 0 for a parallelogram
     /// (`v ≤ 1`); `u ≤ 1` is tested for both.
-    tri_k: Vec4,
+    tri_k: F8,
     /// Lanes holding triangles / other primitives (spheres, disks).
     pub(super) tri_mask: u32,
     pub(super) other_mask: u32,
 }
 
 impl TriPack {
-    /// The pack of the (up to) 4 primitive references `chunk`: its
+    /// The pack of the (up to) 8 primitive references `chunk`: its
     /// triangles (`tris` indexed by the references) go to the SIMD lanes,
     /// spheres and disks are only flagged, padding is left empty.
     pub(super) fn new(chunk: &[u32], tris: &[Tri]) -> TriPack {
-        let mut v0 = [[0f32; 4]; 3];
-        let mut n = [[0f32; 4]; 3];
-        let mut a = [[0f32; 4]; 3];
-        let mut b = [[0f32; 4]; 3];
+        let mut v0 = [[0f32; PACK]; 3];
+        let mut n = [[0f32; PACK]; 3];
+        let mut a = [[0f32; PACK]; 3];
+        let mut b = [[0f32; PACK]; 3];
         let (mut tri_mask, mut other_mask) = (0u32, 0u32);
-        let mut tri_k = [1f32; 4];
+        let mut tri_k = [1f32; PACK];
         for (lane, &p) in chunk.iter().enumerate() {
             if p == PAD {
                 continue;
@@ -64,46 +65,52 @@ impl TriPack {
                 other_mask |= 1 << lane;
             }
         }
-        let v = |a: [[f32; 4]; 3]| a.map(Vec4::from_array);
+        let v = |a: [[f32; PACK]; 3]| a.map(F8::from_array);
         TriPack {
             v0: v(v0),
             n: v(n),
             a: v(a),
             b: v(b),
-            tri_k: Vec4::from_array(tri_k),
+            tri_k: F8::from_array(tri_k),
             tri_mask,
             other_mask,
         }
     }
 
-    /// The 4 triangles against one ray: the mask of triangle lanes hit
+    /// The 8 triangles against one ray: the mask of triangle lanes hit
     /// with `0 < t < t_max`, and every lane's `t`, `u`, `v`.
     #[inline(always)]
-    pub(super) fn hits(&self, o: [Vec4; 3], d: [Vec4; 3], t_max: f32) -> (u32, Vec4, Vec4, Vec4) {
-        let dot = |a: &[Vec4; 3], b: &[Vec4; 3]| a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-        let w = [self.v0[0] - o[0], self.v0[1] - o[1], self.v0[2] - o[2]];
+    pub(super) fn hits(&self, o: [F8; 3], d: [F8; 3], t_max: f32) -> (u32, F8, F8, F8) {
+        // Sums left to right, as `a.x * b.x + a.y * b.y + a.z * b.z`.
+        let dot = |a: &[F8; 3], b: &[F8; 3]| a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]));
+        let w = [
+            self.v0[0].sub(o[0]),
+            self.v0[1].sub(o[1]),
+            self.v0[2].sub(o[2]),
+        ];
         // A ray parallel to the plane (or an empty lane) gives ±inf or NaN,
         // and NaN fails every comparison below.
-        let t = dot(&w, &self.n) / dot(&d, &self.n);
+        let t = dot(&w, &self.n).div(dot(&d, &self.n));
         // P - v0 = t d - w.
-        let u = t * dot(&d, &self.a) - dot(&w, &self.a);
-        let v = t * dot(&d, &self.b) - dot(&w, &self.b);
-        let zero = Vec4::ZERO;
-        let ok = u.cmpge(zero)
-            & v.cmpge(zero)
-            & u.cmple(Vec4::ONE)
-            & (u * self.tri_k + v).cmple(Vec4::ONE)
-            & t.cmpgt(zero)
-            & t.cmplt(Vec4::splat(t_max));
+        let u = t.mul(dot(&d, &self.a)).sub(dot(&w, &self.a));
+        let v = t.mul(dot(&d, &self.b)).sub(dot(&w, &self.b));
+        let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+        let ok = zero
+            .le(u)
+            .and(zero.le(v))
+            .and(u.le(one))
+            .and(u.mul(self.tri_k).add(v).le(one))
+            .and(zero.lt(t))
+            .and(t.lt(F8::splat(t_max)));
         (ok.bitmask() & self.tri_mask, t, u, v)
     }
 }
 
-/// A ray's origin and direction splatted for the 4-wide tests.
+/// A ray's origin and direction splatted for the 8-wide tests.
 #[inline(always)]
-pub(super) fn splat_ray(ray: &Ray) -> ([Vec4; 3], [Vec4; 3]) {
+pub(super) fn splat_ray(ray: &Ray) -> ([F8; 3], [F8; 3]) {
     (
-        ray.o.to_array().map(Vec4::splat),
-        ray.d.to_array().map(Vec4::splat),
+        ray.o.to_array().map(F8::splat),
+        ray.d.to_array().map(F8::splat),
     )
 }

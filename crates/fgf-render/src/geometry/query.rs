@@ -1,13 +1,14 @@
 //! The geometry's queries: the nearest hit, the two nearest hits and every
 //! hit of a segment, all by one BVH traversal that tests each leaf's
-//! triangles 4 at a time and its spheres and disks analytically.
+//! triangles 8 at a time and its spheres and disks analytically.
 
-use super::bvh::Aabb;
+use super::bvh::{Aabb, PACK};
+use super::lanes8::F8;
 use super::pack::splat_ray;
 use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
 use crate::ray::Ray;
-use glam::{Vec3, Vec3A, Vec4};
+use glam::{Vec3, Vec3A};
 
 impl Geometry {
     /// World bounds of all surfaces.
@@ -23,19 +24,19 @@ impl Geometry {
     fn leaf_hits(
         &self,
         ray: &Ray,
-        od: &([Vec4; 3], [Vec4; 3]),
+        od: &([F8; 3], [F8; 3]),
         start: u32,
         count: u32,
         t_max: &mut f32,
         mut f: impl FnMut(u32, f32, f32, f32) -> f32,
     ) -> bool {
-        // Leaves start at multiples of 4 and the lanes after a leaf's last
+        // Leaves start at multiples of PACK and the lanes after a leaf's last
         // primitive are padding (see `Bvh::build`), which is in neither
         // mask of its pack and never hit: the leaf is its whole packs.
         let end = start + count;
         let mut k = start;
         while k < end {
-            let pack = &self.packs[(k / 4) as usize];
+            let pack = &self.packs[(k / PACK as u32) as usize];
             if pack.tri_mask != 0 {
                 let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max);
                 if mask != 0 {
@@ -73,7 +74,7 @@ impl Geometry {
                     }
                 }
             }
-            k += 4;
+            k += PACK as u32;
         }
         true
     }

@@ -108,11 +108,11 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
         let mut count = 0;
         for (i, pack) in g.packs.iter().enumerate() {
             let (mask, t, _, _) = pack.hits(od.0, od.1, t_max);
-            for l in 0..4 {
+            for l in 0..super::bvh::PACK {
                 if mask & (1 << l) != 0 {
                     count += 1;
-                    if want.is_none_or(|w| t[l] < w.0) {
-                        want = Some((t[l], g.prims[4 * i + l]));
+                    if want.is_none_or(|w| t.to_array()[l] < w.0) {
+                        want = Some((t.to_array()[l], g.prims[super::bvh::PACK * i + l]));
                     }
                 }
             }
