@@ -148,19 +148,27 @@ where
     };
     let mut interrupted = false;
     let mut callback_error: Option<PyErr> = None;
+    let ended = AtomicBool::new(false);
     let value = py.detach(|| {
         std::thread::scope(|s| {
             // The job wakes the polling thread when it ends, so a short job
-            // does not wait out the 100 ms poll interval.
+            // does not wait out the 100 ms poll interval. It raises `ended`
+            // before the wake-up: `is_finished` alone becomes true only once
+            // the thread has returned, which may be after the poller has
+            // woken, seen it still running and gone back to sleep for the
+            // whole interval. (`is_finished` still ends the loop if the job
+            // panics.)
             let poller = std::thread::current();
             let counter_ref = &counter;
+            let ended_ref = &ended;
             let handle = s.spawn(move || {
                 let value = job(counter_ref);
+                ended_ref.store(true, Ordering::Release);
                 poller.unpark();
                 value
             });
             let mut last = 0u64;
-            while !handle.is_finished() {
+            while !ended.load(Ordering::Acquire) && !handle.is_finished() {
                 std::thread::park_timeout(Duration::from_millis(100));
                 Python::attach(|py| {
                     if let Err(e) = py.check_signals() {
