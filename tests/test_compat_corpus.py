@@ -22,6 +22,7 @@ import pytest
 
 import fgf
 from test_render_mitsuba import Z_MEAN, compare, welch
+from volpath_shadow_loop import ENVMAP
 
 pytest.importorskip("mitsuba")
 
@@ -90,7 +91,6 @@ SCENES += [
         "test_surf_area_light_volpath",
     )
 ]
-ENVMAP = re.compile(r"<emitter\s+type=[\"']envmap[\"'][^>]*>.*?</emitter>", re.S)
 
 
 FILM_SIZE = re.compile(r'(<integer\s+name\s*=\s*["\'](?:width|height)["\']\s+value\s*=\s*["\'])[^"\']*(["\'])')

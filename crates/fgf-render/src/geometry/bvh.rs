@@ -364,7 +364,7 @@ impl Bvh {
                 let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
                 let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
                 let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
-                let mut mask = tn.le_mask(tf.mul(widen));
+                let mut mask = tn.le(tf.mul(widen)).bitmask();
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
                         cur = node.child[mask.trailing_zeros() as usize];

@@ -1,10 +1,10 @@
-//! `F8`, eight `f32` lanes for the 8-wide BVH nodes: one AVX register where
+//! `F8`, eight `f32` lanes for the 8-wide BVH nodes and leaf packs: one AVX register where
 //! the build enables AVX (the default native build), else two SSE `Vec4`s
 //! (the portable wheel). Both give the same bits in every lane, including
 //! the NaN rule of `min`/`max` that the slab test relies on: if either
 //! operand is NaN, the second one is returned (x86 `minps`/`maxps`).
 //!
-//! Only the handful of operations the slab test needs. The AVX intrinsics
+//! Only the handful of operations the slab and leaf tests need. The AVX intrinsics
 //! are `unsafe` to call even when the build enables AVX (Rust asks the
 //! calling function to enable it itself, which `#[inline(always)]`
 //! functions cannot); this module is compiled only when it does.
@@ -77,11 +77,6 @@ mod avx {
         #[inline(always)]
         pub fn lt(self, b: F8) -> M8 {
             M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, b.0) })
-        }
-        /// Bit `i` set where lane `i` of `self` is `<= b` (false for NaN).
-        #[inline(always)]
-        pub fn le_mask(self, b: F8) -> u32 {
-            (unsafe { _mm256_movemask_ps(_mm256_cmp_ps::<_CMP_LE_OQ>(self.0, b.0)) }) as u32
         }
     }
 
@@ -187,10 +182,6 @@ mod pairs {
         pub fn lt(self, b: F8) -> M8 {
             M8([self.0[0].cmplt(b.0[0]), self.0[1].cmplt(b.0[1])])
         }
-        #[inline(always)]
-        pub fn le_mask(self, b: F8) -> u32 {
-            self.0[0].cmple(b.0[0]).bitmask() | self.0[1].cmple(b.0[1]).bitmask() << 4
-        }
     }
 }
 
@@ -237,14 +228,12 @@ mod tests {
             assert_eq!(bits(fa.mul(fb).to_array()), bits(pa.mul(pb).to_array()));
             assert_eq!(bits(fa.min(fb).to_array()), bits(pa.min(pb).to_array()));
             assert_eq!(bits(fa.max(fb).to_array()), bits(pa.max(pb).to_array()));
-            assert_eq!(fa.le_mask(fb), pa.le_mask(pb));
             assert_eq!(bits(fa.add(fb).to_array()), bits(pa.add(pb).to_array()));
             assert_eq!(bits(fa.div(fb).to_array()), bits(pa.div(pb).to_array()));
             assert_eq!(fa.le(fb).bitmask(), pa.le(pb).bitmask());
             assert_eq!(fa.lt(fb).bitmask(), pa.lt(pb).bitmask());
             let (m, pm) = (fa.le(fb).and(fb.lt(fa)), pa.le(pb).and(pb.lt(pa)));
             assert_eq!(m.bitmask(), pm.bitmask());
-            assert_eq!(fa.le(fb).bitmask(), fa.le_mask(fb));
             // The NaN rule itself: the second operand.
             for l in 0..8 {
                 let (x, y) = (a[l], b[l]);

@@ -69,7 +69,7 @@ fn packed_bvh_matches_brute_force() {
     }
 }
 
-/// The 4-wide tree over a soup of thousands of small triangles finds the
+/// The 8-wide tree over a soup of thousands of small triangles finds the
 /// nearest hit that testing every leaf pack finds (the same arithmetic, so
 /// the same distance and primitive), for random rays, rays along the axes
 /// (zero direction components) from the soup's vertices (origins on slab
