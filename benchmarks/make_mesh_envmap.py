@@ -1,12 +1,15 @@
 """Assets of ``scenes/reference/mesh-envmap.xml``, generated instead of committed.
 
     python benchmarks/make_mesh_envmap.py [--out scenes/reference/generated] [--force]
+                                          [--quads N_U N_V]
 
 Writes into ``--out`` (default ``scenes/reference/generated/``, ignored by git):
 
 * ``torus.ply``: a bumpy torus, binary little-endian PLY with positions,
   unit normals and texture coordinates per vertex: ``N_U × N_V`` quads
-  (``2 · 400 · 150 = 120,000`` triangles), radii 1 and 0.35, the tube radius
+  (``2 · 400 · 150 = 120,000`` triangles by default; ``--quads 40 15`` makes
+  the same shape of 1,200, whose data fit in the caches, for telling memory
+  stalls from computation), radii 1 and 0.35, the tube radius
   modulated by ``0.04 sin(12·2πu) sin(6·2πv)``. The normals are those of the
   parametric surface (cross product of its two partial derivatives, computed
   analytically), so neither renderer's normal smoothing is involved. The seam
@@ -36,10 +39,11 @@ R_RING, R_TUBE, BUMP = 1.0, 0.35, 0.04
 ENV_W, ENV_H = 256, 128
 
 
-def torus() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Positions, unit normals, uvs (float32) and triangles (int32) of the bumpy torus."""
-    u = np.linspace(0.0, 1.0, N_U + 1)
-    v = np.linspace(0.0, 1.0, N_V + 1)
+def torus(n_u: int = N_U, n_v: int = N_V) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Positions, unit normals, uvs (float32) and triangles (int32) of the bumpy torus
+    of ``n_u × n_v`` quads."""
+    u = np.linspace(0.0, 1.0, n_u + 1)
+    v = np.linspace(0.0, 1.0, n_v + 1)
     uu, vv = np.meshgrid(u, v, indexing="ij")
     a, b = 2 * np.pi * uu, 2 * np.pi * vv
     r = R_TUBE + BUMP * np.sin(12 * a) * np.sin(6 * b)
@@ -57,7 +61,7 @@ def torus() -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     n = np.cross(dp_db, dp_da)  # outward
     n /= np.linalg.norm(n, axis=-1, keepdims=True)
     uv = np.stack([uu, vv], axis=-1)
-    idx = np.arange((N_U + 1) * (N_V + 1)).reshape(N_U + 1, N_V + 1)
+    idx = np.arange((n_u + 1) * (n_v + 1)).reshape(n_u + 1, n_v + 1)
     q00, q10 = idx[:-1, :-1].ravel(), idx[1:, :-1].ravel()
     q01, q11 = idx[:-1, 1:].ravel(), idx[1:, 1:].ravel()
     # Counter-clockwise seen from outside (so the geometric normal agrees with n).
@@ -103,12 +107,12 @@ def sky() -> np.ndarray:
     return np.asarray(img, dtype=np.float32)
 
 
-def ensure(out: Path = OUT, force: bool = False) -> Path:
+def ensure(out: Path = OUT, force: bool = False, quads: tuple[int, int] = (N_U, N_V)) -> Path:
     """Write the assets into `out` if missing (or `force`); returns `out`."""
     out.mkdir(parents=True, exist_ok=True)
     ply, exr = out / "torus.ply", out / "sky.exr"
     if force or not ply.exists():
-        write_ply(ply, *torus())
+        write_ply(ply, *torus(*quads))
     if force or not exr.exists():
         import fgf
 
@@ -120,9 +124,15 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--out", type=Path, default=OUT)
     ap.add_argument("--force", action="store_true", help="rewrite existing files")
+    ap.add_argument("--quads", type=int, nargs=2, default=(N_U, N_V), metavar=("N_U", "N_V"),
+                    help="quads around the ring and the tube (a smaller mesh for the "
+                    "experiment in docs/benchmarks.md; default %(default)s)")
     args = ap.parse_args()
-    out = ensure(args.out, args.force)
-    print(f"wrote {out}/torus.ply ({2 * N_U * N_V} triangles) and {out}/sky.exr ({ENV_W}x{ENV_H})")
+    if min(args.quads) < 3 or args.quads[0] * args.quads[1] > 10_000_000:
+        ap.error("--quads: each at least 3, at most 10,000,000 quads in all")
+    out = ensure(args.out, args.force, tuple(args.quads))
+    n_u, n_v = args.quads
+    print(f"wrote {out}/torus.ply ({2 * n_u * n_v} triangles) and {out}/sky.exr ({ENV_W}x{ENV_H})")
     return 0
 
 
