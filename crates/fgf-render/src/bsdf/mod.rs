@@ -483,29 +483,48 @@ impl Bsdf {
     }
 
     /// Sample `wo` given `wi`; `u1` picks a lobe, `u2` the direction.
+    ///
+    /// As in [`Self::eval_pdf`], the diffuse case stays inline and the other
+    /// models are sampled out of line.
+    #[inline]
     pub fn sample(&self, mut wi: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
+        let BsdfKind::Diffuse { reflectance } = &self.kind else {
+            return self.sample_other(wi, u1, u2);
+        };
+        let flipped = self.twosided && wi.z < 0.0;
+        if flipped {
+            wi.z = -wi.z;
+        }
+        if wi.z <= 0.0 {
+            return None;
+        }
+        let mut wo = sample_cosine_hemisphere(u2);
+        if wo.z <= 0.0 {
+            return None;
+        }
+        let pdf = cosine_hemisphere_pdf(wo.z);
+        if flipped {
+            wo.z = -wo.z;
+        }
+        Some(BsdfSample {
+            wo,
+            weight: *reflectance,
+            pdf,
+            delta: false,
+            eta: 1.0,
+            null: false,
+        })
+    }
+
+    /// [`Self::sample`] for every model but the diffuse one.
+    #[inline(never)]
+    fn sample_other(&self, mut wi: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
         let flipped = self.twosided && wi.z < 0.0;
         if flipped {
             wi.z = -wi.z;
         }
         let mut s = match &self.kind {
-            BsdfKind::Diffuse { reflectance } => {
-                if wi.z <= 0.0 {
-                    return None;
-                }
-                let wo = sample_cosine_hemisphere(u2);
-                if wo.z <= 0.0 {
-                    return None;
-                }
-                BsdfSample {
-                    wo,
-                    weight: *reflectance,
-                    pdf: cosine_hemisphere_pdf(wo.z),
-                    delta: false,
-                    eta: 1.0,
-                    null: false,
-                }
-            }
+            BsdfKind::Diffuse { .. } => unreachable!("diffuse is sampled inline"),
             BsdfKind::Null => BsdfSample {
                 wo: -wi,
                 weight: Spectrum::ONE,

@@ -10,6 +10,7 @@ use glam::Vec3;
 impl Geometry {
     /// A point uniformly distributed (by area) on shape `shape`; the pdf
     /// with respect to area is `1 / areas[shape]`.
+    #[inline]
     pub fn sample_shape(&self, shape: usize, u_sel: f32, u: [f32; 2]) -> PositionSample {
         self.sample_shape_prim(shape, u_sel, u).0
     }

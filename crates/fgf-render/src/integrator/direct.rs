@@ -225,23 +225,26 @@ impl World {
         let ray = Ray { o, d };
         let mut tr = Spectrum::ONE;
         // Transmittance of medium `m` over [t0, t1].
-        let segment = |m: u32, start, t0: f32, t1: f32, s: &mut Sampler| {
+        let segment = |world: &World, m: u32, start, t0: f32, t1: f32, s: &mut Sampler| {
             let seg = Ray { o: ray.at(t0), d };
             let t_seg = (t1 - t0).max(0.0);
-            self.media[m as usize].transmittance(&seg, t_seg, start, SegmentEnd::Surface, s)
+            world.media[m as usize].transmittance(&seg, t_seg, start, SegmentEnd::Surface, s)
         };
         // Distance and primitive of the last crossing handled: a resumed
         // query skips everything up to it, in (t, primitive) order.
         let mut done = (0.0f32, 0u32);
         loop {
+            // Loads from the world at their use, not hoisted before the loop
+            // (and spilled) for the rare second pass (see `World::li`).
+            let world = std::hint::black_box(self);
             let mut xs = [(0.0f32, 0u32, 0u32, Vec3::ZERO); MAX_CROSSINGS];
             let mut len = 0usize;
             let mut more = false;
-            let open = self.geom.for_each_hit(&ray, t_end, |prim, shape, t, n| {
+            let open = world.geom.for_each_hit(&ray, t_end, |prim, shape, t, n| {
                 if (t, prim) <= done {
                     return true;
                 }
-                let info = &self.shapes[shape as usize];
+                let info = &world.shapes[shape as usize];
                 if !info.null && !info.partial {
                     return false;
                 }
@@ -270,14 +273,14 @@ impl World {
             // crossings are in hand) the last one up to t_end.
             for &(t, prim, shape, n) in &xs[..len] {
                 if let Some(m) = medium {
-                    tr *= segment(m, start, done.0, t, s);
+                    tr *= segment(world, m, start, done.0, t, s);
                     if tr == Spectrum::ZERO {
                         return tr;
                     }
                 }
-                let info = &self.shapes[shape as usize];
+                let info = &world.shapes[shape as usize];
                 if info.partial {
-                    tr *= self.partial_transmission(&ray, prim, t, info.bsdf);
+                    tr *= world.partial_transmission(&ray, prim, t, info.bsdf);
                     if tr == Spectrum::ZERO {
                         return tr;
                     }
@@ -288,7 +291,7 @@ impl World {
             }
             if !more {
                 if let Some(m) = medium {
-                    tr *= segment(m, start, done.0, t_end, s);
+                    tr *= segment(world, m, start, done.0, t_end, s);
                 }
                 return tr;
             }

@@ -103,12 +103,17 @@ impl World {
         // The nearest hit of `ray`, when a previous query already found it.
         let mut known: Known<Hit> = Known::Unknown;
         loop {
+            // Invariant loads from the world are made here, at their use,
+            // not hoisted before the loop: hoisted, they were spilled to the
+            // stack in the prologue of every call (~90 instructions per
+            // sample), while most paths make only a few iterations.
+            let world = std::hint::black_box(self);
             // `after`: what the query says of the ray continued through `hit`.
             let (hit, after) = match std::mem::replace(&mut known, Known::Unknown) {
                 Known::Hit(h) => (Some(h), Known::Unknown),
                 Known::Miss => (None, Known::Unknown),
-                Known::Unknown if self.any_null => {
-                    let (h1, h2) = self.geom.intersect2(&ray, t_max);
+                Known::Unknown if world.any_null => {
+                    let (h1, h2) = world.geom.intersect2(&ray, t_max);
                     let after = match h2 {
                         Some(r) => Known::Hit(r),
                         None if t_max == f32::INFINITY => Known::Miss,
@@ -118,11 +123,11 @@ impl World {
                     };
                     (h1, after)
                 }
-                Known::Unknown => (self.geom.intersect(&ray, t_max), Known::Unknown),
+                Known::Unknown => (world.geom.intersect(&ray, t_max), Known::Unknown),
             };
             let t_surf = hit.map_or(t_max, |h| h.t);
             if let Some(m) = medium {
-                let med = &self.media[m as usize];
+                let med = &world.media[m as usize];
                 let (ds, r) = med.sample_distance_spectral(&ray, t_surf, start, hero, s);
                 thr *= ds.weight;
                 r_u *= r;
@@ -136,7 +141,7 @@ impl World {
                 inv_mis = 1.0 / crate::spectrum::mean(r_u);
                 if ds.event == DistanceEvent::Scatter {
                     depth += 1;
-                    if depth >= self.max_depth || thr == Spectrum::ZERO {
+                    if depth >= world.max_depth || thr == Spectrum::ZERO {
                         break;
                     }
                     let p = ray.at(ds.t);
@@ -146,7 +151,7 @@ impl World {
                     // then phase sampling alone finds the light, and the
                     // emission it finds counts fully, as after a delta
                     // interaction (Mitsuba's semantics).
-                    let nee = self.media_sample_emitters[m as usize];
+                    let nee = world.media_sample_emitters[m as usize];
                     if nee {
                         let vertex = MediumVertex {
                             p,
@@ -154,7 +159,7 @@ impl World {
                             phase,
                             medium,
                         };
-                        if let Some((le, f, w)) = self.direct(&vertex, s) {
+                        if let Some((le, f, w)) = world.direct(&vertex, s) {
                             l += thr * le * (f * w * inv_mis);
                         }
                     }
@@ -165,7 +170,7 @@ impl World {
                     ray = Ray { o: p, d: wo };
                     start = SegmentStart::Medium;
                     t_max = f32::INFINITY;
-                    if !self.roulette(depth, &mut thr, inv_mis, eta, s) {
+                    if !world.roulette(depth, &mut thr, inv_mis, eta, s) {
                         break;
                     }
                     continue;
@@ -177,15 +182,15 @@ impl World {
             t_max = f32::INFINITY;
             let Some(h) = hit else {
                 // Escaped: the environment, if any.
-                if let Some(e) = self.env {
-                    if !(depth == 0 && self.hide_emitters) {
+                if let Some(e) = world.env {
+                    if !(depth == 0 && world.hide_emitters) {
                         if let Some((radiance, env_pdf)) =
-                            self.emitters[e as usize].environment(ray.d)
+                            world.emitters[e as usize].environment(ray.d)
                         {
                             let w = if specular {
                                 1.0
                             } else {
-                                mis_power(prev_pdf, env_pdf * self.select_pdf())
+                                mis_power(prev_pdf, env_pdf * world.select_pdf())
                             };
                             l += thr * radiance * (w * inv_mis);
                         }
@@ -193,28 +198,28 @@ impl World {
                 }
                 break;
             };
-            let info = self.shapes[h.shape as usize];
+            let info = world.shapes[h.shape as usize];
             // Emission of an area light seen from its front side (that of
             // the shading normal, as in `Emitter::sample`).
             if let Some(e) = info.emitter {
-                if !(depth == 0 && self.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
-                    let em = &self.emitters[e as usize];
+                if !(depth == 0 && world.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
+                    let em = &world.emitters[e as usize];
                     if let Some(shape) = em.area_shape() {
-                        let radiance = em.area_radiance(&self.geom, &h);
+                        let radiance = em.area_radiance(&world.geom, &h);
                         let w = if specular {
                             1.0
                         } else {
                             let d2 = (h.p - prev_p).length_squared();
                             let cos_l = -h.ns.dot(ray.d);
-                            let light_pdf =
-                                self.select_pdf() * d2 / (cos_l * self.geom.areas[shape as usize]);
+                            let light_pdf = world.select_pdf() * d2
+                                / (cos_l * world.geom.areas[shape as usize]);
                             mis_power(prev_pdf, light_pdf)
                         };
                         l += thr * radiance * (w * inv_mis);
                     }
                 }
             }
-            let bsdf = &self.bsdfs[info.bsdf as usize];
+            let bsdf = &world.bsdfs[info.bsdf as usize];
             if bsdf.is_null() {
                 // Index-matched boundary: continue straight on; a new segment starts.
                 medium = info.target_medium(h.n, ray.d, medium);
@@ -225,7 +230,7 @@ impl World {
                     Known::Unknown => Known::Unknown,
                     Known::Miss => Known::Miss,
                     Known::Hit(h2) => {
-                        let h2 = self.geom.make_hit(&ray, h2);
+                        let h2 = world.geom.make_hit(&ray, h2);
                         let t = (h2.p - o).dot(ray.d);
                         if t > 0.0 {
                             Known::Hit(Hit { t, ..h2 })
@@ -238,19 +243,19 @@ impl World {
                 start = SegmentStart::Surface;
                 continue;
             }
-            let bsdf = self.bsdf_at(bsdf, &h);
+            let bsdf = world.bsdf_at(bsdf, &h);
             let bsdf = &*bsdf;
             // This interaction would be event number depth + 1: nothing it
             // leads to can contribute unless depth + 1 < max_depth.
             // A null-lobe sample may not count (see below), so its sample
             // is drawn first and the test made after it.
-            let null_crossings = self.thin_is_crossing && bsdf.has_null_lobe();
-            if depth + 1 >= self.max_depth && !null_crossings {
+            let null_crossings = world.thin_is_crossing && bsdf.has_null_lobe();
+            if depth + 1 >= world.max_depth && !null_crossings {
                 break;
             }
-            let frame = self.frame_at(bsdf, &h);
+            let frame = world.frame_at(bsdf, &h);
             let wi_local = frame.to_local(-ray.d);
-            if bsdf.is_smooth() && depth + 1 < self.max_depth {
+            if bsdf.is_smooth() && depth + 1 < world.max_depth {
                 // Next-event estimation from the surface.
                 let vertex = SurfaceVertex {
                     hit: &h,
@@ -260,7 +265,7 @@ impl World {
                     wi_local,
                     medium,
                 };
-                if let Some((le, f, w)) = self.direct(&vertex, s) {
+                if let Some((le, f, w)) = world.direct(&vertex, s) {
                     l += thr * le * f * (w * inv_mis);
                 }
             }
@@ -275,7 +280,7 @@ impl World {
             // shadow rays pass the surface); under path a bounce, as in
             // Mitsuba's path.
             let crossing = null_crossings && bs.null;
-            if !crossing && depth + 1 >= self.max_depth {
+            if !crossing && depth + 1 >= world.max_depth {
                 break;
             }
             let wo = frame.to_world(bs.wo);
@@ -293,7 +298,7 @@ impl World {
                 d: wo,
             };
             start = SegmentStart::Surface;
-            if thr == Spectrum::ZERO || !self.roulette(depth, &mut thr, inv_mis, eta, s) {
+            if thr == Spectrum::ZERO || !world.roulette(depth, &mut thr, inv_mis, eta, s) {
                 break;
             }
         }

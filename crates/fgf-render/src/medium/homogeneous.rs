@@ -24,6 +24,9 @@ pub struct Homogeneous {
     /// `albedo · sigma_t`.
     pub sigma_s: Spectrum,
     pub phase: Phase,
+    /// The three channels of `sigma_t` are equal: one exponential per
+    /// flight, and the hero weights' channel ratios are exactly 1.
+    grey: bool,
 }
 
 /// `e^{-σ t}` per channel with `0·∞ = 0` (a channel without extinction
@@ -44,6 +47,7 @@ impl Homogeneous {
             sigma_t,
             sigma_s: sigma_t * albedo,
             phase,
+            grey: sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z,
         }
     }
 
@@ -79,6 +83,7 @@ impl Homogeneous {
     /// Free flight sampled with the pdf of channel `hero` only; returns the
     /// sample (weight = integrand / hero pdf) and the ratio `r` of every
     /// channel's pdf to the hero's (see `Medium::sample_distance_spectral`).
+    #[inline]
     pub fn sample_distance_hero(
         &self,
         t_max: f32,
@@ -91,6 +96,46 @@ impl Homogeneous {
         } else {
             f32::INFINITY
         };
+        if self.grey {
+            // Every channel is the hero: the ratios σ·Tr / (σ_h·Tr_h) and
+            // Tr / Tr_h below are x/x = 1 exactly, so only the scattering
+            // weight is computed (with the same operations, hence bits).
+            let sigma = self.sigma_t.x;
+            if t < t_max {
+                let trv = if sigma == 0.0 {
+                    1.0
+                } else {
+                    (-sigma * t).exp()
+                };
+                let pdf_h = sigma * trv;
+                return (
+                    DistanceSample {
+                        t,
+                        weight: self.sigma_s * trv / pdf_h,
+                        event: DistanceEvent::Scatter,
+                    },
+                    Spectrum::ONE,
+                );
+            }
+            let p_h = if sigma == 0.0 {
+                1.0
+            } else {
+                (-sigma * t_max).exp()
+            };
+            let w = if p_h > 0.0 {
+                Spectrum::ONE
+            } else {
+                Spectrum::ZERO
+            };
+            return (
+                DistanceSample {
+                    t: t_max,
+                    weight: w,
+                    event: DistanceEvent::Surface,
+                },
+                Spectrum::ONE,
+            );
+        }
         if t < t_max {
             let trv = tr(self.sigma_t, t);
             // σ_h t ≤ -ln(2⁻²⁴) ≈ 16.6, so the hero pdf is ≥ σ_h·6e-8: no underflow.
