@@ -33,12 +33,22 @@ pub struct Homogeneous {
 /// transmits everything, even over an infinite distance).
 #[inline]
 fn tr(sigma_t: Spectrum, t: f32) -> Spectrum {
-    let f = |s: f32| if s == 0.0 { 1.0 } else { (-s * t).exp() };
+    let f = |s: f32| tr1(s, t);
     // Grey media (the common case) need one exponential, not three.
     if sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z {
         return Spectrum::splat(f(sigma_t.x));
     }
     Spectrum::new(f(sigma_t.x), f(sigma_t.y), f(sigma_t.z))
+}
+
+/// [`tr`] of one channel.
+#[inline(always)]
+fn tr1(sigma: f32, t: f32) -> f32 {
+    if sigma == 0.0 {
+        1.0
+    } else {
+        (-sigma * t).exp()
+    }
 }
 
 impl Homogeneous {
@@ -102,11 +112,7 @@ impl Homogeneous {
             // weight is computed (with the same operations, hence bits).
             let sigma = self.sigma_t.x;
             if t < t_max {
-                let trv = if sigma == 0.0 {
-                    1.0
-                } else {
-                    (-sigma * t).exp()
-                };
+                let trv = tr1(sigma, t);
                 let pdf_h = sigma * trv;
                 return (
                     DistanceSample {
@@ -117,12 +123,7 @@ impl Homogeneous {
                     Spectrum::ONE,
                 );
             }
-            let p_h = if sigma == 0.0 {
-                1.0
-            } else {
-                (-sigma * t_max).exp()
-            };
-            let w = if p_h > 0.0 {
+            let w = if tr1(sigma, t_max) > 0.0 {
                 Spectrum::ONE
             } else {
                 Spectrum::ZERO
