@@ -37,7 +37,7 @@ pub mod rough;
 #[cfg(test)]
 mod tests;
 
-pub use fresnel::{fresnel_conductor, fresnel_dielectric, FresnelDielectric};
+pub use fresnel::{fresnel_conductor, fresnel_conductor_rgb, fresnel_dielectric, FresnelDielectric};
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::Spectrum;
@@ -611,11 +611,7 @@ impl Bsdf {
                 let fr = if mirror {
                     Spectrum::ONE
                 } else {
-                    Spectrum::new(
-                        fresnel_conductor(wi.z, eta.x, k.x),
-                        fresnel_conductor(wi.z, eta.y, k.y),
-                        fresnel_conductor(wi.z, eta.z, k.z),
-                    )
+                    fresnel_conductor_rgb(wi.z, eta, k)
                 };
                 BsdfSample {
                     wo: Vec3::new(-wi.x, -wi.y, wi.z),

@@ -5,7 +5,7 @@
 //! Mitsuba's radiance-mode factor `(η_i/η_t)²`, which cancels the `η_t²`
 //! of Walter's eq. 21.
 
-use super::fresnel::{fresnel_conductor, fresnel_dielectric};
+use super::fresnel::{fresnel_conductor_rgb, fresnel_dielectric};
 use super::microfacet::{reflect, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
@@ -27,11 +27,7 @@ impl RoughConductor {
         if self.mirror {
             Spectrum::ONE
         } else {
-            Spectrum::new(
-                fresnel_conductor(cos_i, self.eta.x, self.k.x),
-                fresnel_conductor(cos_i, self.eta.y, self.k.y),
-                fresnel_conductor(cos_i, self.eta.z, self.k.z),
-            )
+            fresnel_conductor_rgb(cos_i, self.eta, self.k)
         }
     }
 
