@@ -37,7 +37,9 @@ pub mod rough;
 #[cfg(test)]
 mod tests;
 
-pub use fresnel::{fresnel_conductor, fresnel_conductor_rgb, fresnel_dielectric, FresnelDielectric};
+pub use fresnel::{
+    fresnel_conductor, fresnel_conductor_rgb, fresnel_dielectric, FresnelDielectric,
+};
 
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::Spectrum;

@@ -289,7 +289,7 @@ fn energy_and_reciprocity() {
             }
             let m = sum / n as f32;
             let se = ((sum2 / n as f32 - m * m) / n as f32).max(Spectrum::ZERO);
-            let se = Vec3::new(se.x.sqrt(), se.y.sqrt(), se.z.sqrt());
+            let se = Spectrum::new(se.x.sqrt(), se.y.sqrt(), se.z.sqrt());
             assert!(
                 (m - 3.0 * se).max_element() <= 1.0 + 1e-4,
                 "{name} wi={wi}: albedo {m} (SE {se})"

@@ -107,7 +107,7 @@ impl Envmap {
         for y in 0..h {
             for x in 0..=w {
                 let i = (y * w + x % w) * 3;
-                data.push(Vec3::new(img.data[i], img.data[i + 1], img.data[i + 2]));
+                data.push(Spectrum::new(img.data[i], img.data[i + 1], img.data[i + 2]));
             }
         }
         let (nx, ny) = (w, h - 1);
