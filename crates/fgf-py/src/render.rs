@@ -422,7 +422,7 @@ fn bsdf_eval_pdf<'py>(
     let (mut f, mut pdf) = (Vec::with_capacity(3 * n), Vec::with_capacity(n));
     for k in 0..n {
         let v =
-            |a: &numpy::ndarray::ArrayView2<f32>| glam::Vec3::new(a[[k, 0]], a[[k, 1]], a[[k, 2]]);
+            |a: &numpy::ndarray::ArrayView2<f32>| glam::Vec3A::new(a[[k, 0]], a[[k, 1]], a[[k, 2]]);
         let (fk, pk) = bsdf.eval_pdf(v(&wi), v(&wo));
         f.extend_from_slice(&[fk.x, fk.y, fk.z]);
         pdf.push(pk);
@@ -462,7 +462,7 @@ fn shading_frame<'py>(
     let (mut out, mut shapes) = (Vec::with_capacity(9 * n), Vec::with_capacity(n));
     for k in 0..n {
         let v =
-            |a: &numpy::ndarray::ArrayView2<f32>| glam::Vec3::new(a[[k, 0]], a[[k, 1]], a[[k, 2]]);
+            |a: &numpy::ndarray::ArrayView2<f32>| glam::Vec3A::new(a[[k, 0]], a[[k, 1]], a[[k, 2]]);
         let ray = fgf_render::ray::Ray {
             o: v(&o),
             d: v(&d).normalize(),
@@ -524,7 +524,7 @@ fn bsdf_sample<'py>(
         Vec::with_capacity(n),
     );
     for k in 0..n {
-        let v = glam::Vec3::new(wi[[k, 0]], wi[[k, 1]], wi[[k, 2]]);
+        let v = glam::Vec3A::new(wi[[k, 0]], wi[[k, 1]], wi[[k, 2]]);
         match bsdf.sample(v, u[[k, 0]], [u[[k, 1]], u[[k, 2]]]) {
             Some(bs) => {
                 wo.extend_from_slice(&[bs.wo.x, bs.wo.y, bs.wo.z]);

@@ -7,7 +7,7 @@
 use crate::error::RenderError;
 use crate::ray::Ray;
 use fgf_scene::{FovAxis, SensorDesc};
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Vec3A};
 
 #[derive(Debug, Clone)]
 pub struct Camera {
@@ -82,10 +82,10 @@ impl Camera {
         // The point on the local z = 1 plane; its distance `len` from the
         // eye scales the near and far planes (given along the view axis)
         // into distances along the ray.
-        let local = Vec3::new(-nx * self.tan_x, -ny * self.tan_y, 1.0);
+        let local = Vec3A::new(-nx * self.tan_x, -ny * self.tan_y, 1.0);
         let len = local.length();
-        let o = Vec3::from(self.to_world.translation);
-        let d = self.to_world.transform_vector3(local).normalize();
+        let o = self.to_world.translation;
+        let d = self.to_world.transform_vector3a(local).normalize();
         let t_near = self.near * len;
         (
             Ray {
@@ -133,25 +133,25 @@ mod tests {
     fn rays_follow_mitsuba_film_conventions() {
         let c = Camera::new(&sensor(FovAxis::X, 200, 100)).unwrap();
         let (r, _) = c.generate_ray(100.0, 50.0);
-        assert!((r.d - Vec3::new(0.0, 0.0, -1.0)).length() < 1e-6);
+        assert!((r.d - Vec3A::new(0.0, 0.0, -1.0)).length() < 1e-6);
         let (r, _) = c.generate_ray(200.0, 50.0);
         // fov 90 along x: 45° to the right.
         assert!(
-            (r.d - Vec3::new(1.0, 0.0, -1.0).normalize()).length() < 1e-5,
+            (r.d - Vec3A::new(1.0, 0.0, -1.0).normalize()).length() < 1e-5,
             "{:?}",
             r.d
         );
         let (r, _) = c.generate_ray(100.0, 0.0);
         // Aspect 2: tan(half fov y) = 0.5, toward +y at the top.
         assert!(
-            (r.d - Vec3::new(0.0, 0.5, -1.0).normalize()).length() < 1e-5,
+            (r.d - Vec3A::new(0.0, 0.5, -1.0).normalize()).length() < 1e-5,
             "{:?}",
             r.d
         );
         // fov along y on the same film: the top edge is at 45°.
         let c = Camera::new(&sensor(FovAxis::Y, 200, 100)).unwrap();
         let (r, _) = c.generate_ray(100.0, 0.0);
-        assert!((r.d - Vec3::new(0.0, 1.0, -1.0).normalize()).length() < 1e-5);
+        assert!((r.d - Vec3A::new(0.0, 1.0, -1.0).normalize()).length() < 1e-5);
         // smaller = y for a landscape film.
         let c = Camera::new(&sensor(FovAxis::Smaller, 200, 100)).unwrap();
         let (r2, _) = c.generate_ray(100.0, 0.0);

@@ -5,7 +5,7 @@
 //! and come with their pdf (pbrt-v4's habit), so they can be tested alone.
 
 use fgf_core::rng::{mix64, stream_key, SECOND_WORD};
-use glam::Vec3;
+use glam::Vec3A;
 use rand::RngCore;
 use rand_pcg::Pcg32;
 use std::f32::consts::PI;
@@ -65,35 +65,35 @@ impl Sampler {
 /// branchless construction).
 #[derive(Debug, Clone, Copy)]
 pub struct Frame {
-    pub s: Vec3,
-    pub t: Vec3,
-    pub n: Vec3,
+    pub s: Vec3A,
+    pub t: Vec3A,
+    pub n: Vec3A,
 }
 
 impl Frame {
-    pub fn from_normal(n: Vec3) -> Self {
+    pub fn from_normal(n: Vec3A) -> Self {
         let sign = 1f32.copysign(n.z);
         let a = -1.0 / (sign + n.z);
         let b = n.x * n.y * a;
-        let s = Vec3::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
-        let t = Vec3::new(b, sign + n.y * n.y * a, -n.y);
+        let s = Vec3A::new(1.0 + sign * n.x * n.x * a, sign * b, -sign * n.x);
+        let t = Vec3A::new(b, sign + n.y * n.y * a, -n.y);
         Frame { s, t, n }
     }
     #[inline]
-    pub fn to_local(&self, v: Vec3) -> Vec3 {
-        Vec3::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
+    pub fn to_local(&self, v: Vec3A) -> Vec3A {
+        Vec3A::new(v.dot(self.s), v.dot(self.t), v.dot(self.n))
     }
     #[inline]
-    pub fn to_world(&self, v: Vec3) -> Vec3 {
+    pub fn to_world(&self, v: Vec3A) -> Vec3A {
         self.s * v.x + self.t * v.y + self.n * v.z
     }
 }
 
 /// Cosine-weighted hemisphere around +z (Malley's method on a concentric disk).
-pub fn sample_cosine_hemisphere(u: [f32; 2]) -> Vec3 {
+pub fn sample_cosine_hemisphere(u: [f32; 2]) -> Vec3A {
     let d = sample_concentric_disk(u);
     let z = (1.0 - d[0] * d[0] - d[1] * d[1]).max(0.0).sqrt();
-    Vec3::new(d[0], d[1], z)
+    Vec3A::new(d[0], d[1], z)
 }
 
 /// Pdf (solid angle) of [`sample_cosine_hemisphere`].
@@ -118,11 +118,11 @@ pub fn sample_concentric_disk(u: [f32; 2]) -> [f32; 2] {
 }
 
 /// Uniform direction on the unit sphere; pdf `1/(4π)`.
-pub fn sample_uniform_sphere(u: [f32; 2]) -> Vec3 {
+pub fn sample_uniform_sphere(u: [f32; 2]) -> Vec3A {
     let z = 1.0 - 2.0 * u[0];
     let r = (1.0 - z * z).max(0.0).sqrt();
     let phi = 2.0 * PI * u[1];
-    Vec3::new(r * phi.cos(), r * phi.sin(), z)
+    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
 }
 
 pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * PI);
@@ -155,10 +155,10 @@ mod tests {
     #[test]
     fn frame_is_orthonormal() {
         for n in [
-            Vec3::Z,
-            -Vec3::Z,
-            Vec3::new(0.3, -0.4, 0.866).normalize(),
-            Vec3::X,
+            Vec3A::Z,
+            -Vec3A::Z,
+            Vec3A::new(0.3, -0.4, 0.866).normalize(),
+            Vec3A::X,
         ] {
             let f = Frame::from_normal(n);
             assert!((f.s.length() - 1.0).abs() < 1e-5);
@@ -166,7 +166,7 @@ mod tests {
             assert!(
                 f.s.dot(f.t).abs() < 1e-5 && f.s.dot(n).abs() < 1e-5 && f.t.dot(n).abs() < 1e-5
             );
-            let v = Vec3::new(0.2, 0.5, -0.7);
+            let v = Vec3A::new(0.2, 0.5, -0.7);
             assert!((f.to_world(f.to_local(v)) - v).length() < 1e-5);
         }
     }

@@ -9,7 +9,7 @@
 
 use crate::math::{sample_uniform_sphere, Frame, UNIFORM_SPHERE_PDF};
 use fgf_scene::PhaseDesc;
-use glam::Vec3;
+use glam::Vec3A;
 use std::f32::consts::PI;
 
 #[derive(Debug, Clone, Copy)]
@@ -28,7 +28,7 @@ impl Phase {
 
     /// Phase function value (= pdf) for propagation direction `d` and outgoing `wo`.
     #[inline]
-    pub fn eval(&self, d: Vec3, wo: Vec3) -> f32 {
+    pub fn eval(&self, d: Vec3A, wo: Vec3A) -> f32 {
         match *self {
             Phase::Isotropic => UNIFORM_SPHERE_PDF,
             Phase::Hg { g } => hg(d.dot(wo), g),
@@ -37,7 +37,7 @@ impl Phase {
 
     /// Sample `wo`; returns it with its pdf (= value).
     #[inline]
-    pub fn sample(&self, d: Vec3, u: [f32; 2]) -> (Vec3, f32) {
+    pub fn sample(&self, d: Vec3A, u: [f32; 2]) -> (Vec3A, f32) {
         match *self {
             Phase::Isotropic => (sample_uniform_sphere(u), UNIFORM_SPHERE_PDF),
             Phase::Hg { g } => {
@@ -51,7 +51,7 @@ impl Phase {
                 };
                 let sin = (1.0 - cos * cos).max(0.0).sqrt();
                 let phi = 2.0 * PI * u[1];
-                let wo = Frame::from_normal(d).to_world(Vec3::new(
+                let wo = Frame::from_normal(d).to_world(Vec3A::new(
                     sin * phi.cos(),
                     sin * phi.sin(),
                     cos,
@@ -94,7 +94,7 @@ mod tests {
     #[test]
     fn hg_sampling_mean_cosine() {
         let g = 0.6f32;
-        let d = Vec3::new(0.0, 0.6, 0.8);
+        let d = Vec3A::new(0.0, 0.6, 0.8);
         let n = 20_000;
         let mut sum = 0.0f64;
         for i in 0..n {

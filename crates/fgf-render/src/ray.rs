@@ -1,18 +1,18 @@
 //! Rays and spawning them off surfaces: the one geometric type that media,
 //! the camera and the geometry all need.
 
-use glam::Vec3;
+use glam::Vec3A;
 
 /// A ray `o + t d` with unit `d`.
 #[derive(Debug, Clone, Copy)]
 pub struct Ray {
-    pub o: Vec3,
-    pub d: Vec3,
+    pub o: Vec3A,
+    pub d: Vec3A,
 }
 
 impl Ray {
     #[inline]
-    pub fn at(&self, t: f32) -> Vec3 {
+    pub fn at(&self, t: f32) -> Vec3A {
         self.o + t * self.d
     }
 }
@@ -26,7 +26,7 @@ const OFFSET_SCALE: f32 = 1.0 / 65536.0;
 
 /// Offset of the hit point `p` along `n`, to the side `d` points to.
 #[inline]
-pub fn offset_point(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
+pub fn offset_point(p: Vec3A, n: Vec3A, d: Vec3A) -> Vec3A {
     let eps = (1.0 + p.abs().max_element()) * OFFSET_SCALE;
     if d.dot(n) >= 0.0 {
         p + eps * n
@@ -38,6 +38,6 @@ pub fn offset_point(p: Vec3, n: Vec3, d: Vec3) -> Vec3 {
 /// Distance to stop a shadow ray short of a sampled light point `q`, so that
 /// it does not hit the light's own surface.
 #[inline]
-pub fn shadow_epsilon(q: Vec3) -> f32 {
+pub fn shadow_epsilon(q: Vec3A) -> f32 {
     4.0 * (1.0 + q.abs().max_element()) * OFFSET_SCALE
 }

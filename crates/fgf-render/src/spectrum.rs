@@ -6,9 +6,9 @@ use fgf_scene::Rgb;
 use glam::Vec3A;
 
 /// Linear RGB radiance/throughput; component-wise arithmetic. glam's
-/// 16-byte `Vec3A`: one SSE instruction per operation on the three
-/// channels, where `Vec3` takes three (the same bits either way; 0.8 % fewer
-/// instructions on the homogeneous cube, 1.8 % on the mesh scene).
+/// 16-byte `Vec3A`, like the renderer's points and directions: one SSE
+/// instruction per operation on the three components, where glam's `Vec3`
+/// takes three (see `docs/benchmarks.md`, "Vec3A").
 pub type Spectrum = Vec3A;
 
 /// The scene description's colour as a [`Spectrum`].

@@ -9,7 +9,7 @@ use crate::error::RenderError;
 use crate::geometry::Geometry;
 use crate::medium::Medium;
 use fgf_scene::SceneDesc;
-use glam::Vec3;
+use glam::Vec3A;
 
 /// Per-shape data the integrator needs at a hit.
 #[derive(Debug, Clone, Copy)]
@@ -31,7 +31,7 @@ impl ShapeInfo {
     /// enters, if the shape is a medium boundary (Mitsuba: exterior on the
     /// normal side).
     #[inline]
-    pub fn target_medium(&self, n: Vec3, d: Vec3, current: Option<u32>) -> Option<u32> {
+    pub fn target_medium(&self, n: Vec3A, d: Vec3A, current: Option<u32>) -> Option<u32> {
         if self.interior.is_none() && self.exterior.is_none() {
             current
         } else if d.dot(n) > 0.0 {

@@ -27,7 +27,7 @@ use fgf_render::ray::Ray;
 use fgf_render::spectrum::Spectrum;
 use fgf_render::world::World;
 use fgf_scene::{MediumDesc, SceneDesc};
-use glam::Vec3;
+use glam::Vec3A;
 
 const Z: f64 = 4.5;
 
@@ -138,7 +138,7 @@ fn furnace_returns_the_environment_radiance() {
                 world.camera_medium = Some(0);
                 let (mean, se) = estimate(4000, 1, |s| {
                     let d = sample_uniform_sphere(s.next_2d());
-                    let o = Vec3::new(0.3, -0.2, 0.1);
+                    let o = Vec3A::new(0.3, -0.2, 0.1);
                     world.li(Ray { o, d }, f32::INFINITY, s)
                 });
                 assert_close(
@@ -180,8 +180,8 @@ fn slab_uncollided_transmission_is_t_ss() {
                 let (mean, se) = estimate(20000, 2, |s| {
                     world.li(
                         Ray {
-                            o: Vec3::new(0.0, 0.0, -2.0),
-                            d: Vec3::Z,
+                            o: Vec3A::new(0.0, 0.0, -2.0),
+                            d: Vec3A::Z,
                         },
                         f32::INFINITY,
                         s,
@@ -228,8 +228,8 @@ fn free_flights_follow_the_kernel() {
                 let med = Medium::from_desc(&sc.media[0], 0).unwrap();
                 let reciprocal_medium = kernel == "reciprocal" && start == SegmentStart::Medium;
                 let ray = Ray {
-                    o: Vec3::ZERO,
-                    d: Vec3::X,
+                    o: Vec3A::ZERO,
+                    d: Vec3A::X,
                 };
                 let t_max = 0.4f32;
                 let expected = [0, 1, 2].map(|c| {
@@ -361,8 +361,8 @@ fn single_scattering_slab_matches_quadrature() {
             let (mean, se) = estimate(40000, 5, |s| {
                 world.li(
                     Ray {
-                        o: Vec3::new(0.0, 0.0, -2.0),
-                        d: Vec3::Z,
+                        o: Vec3A::new(0.0, 0.0, -2.0),
+                        d: Vec3A::Z,
                     },
                     f32::INFINITY,
                     s,
@@ -419,8 +419,8 @@ fn macro_density_uses_the_exact_optical_path() {
     let mo = model_of(&sc.media[0], 0);
     // Along x through the middle of the unit cube, from outside (x = -0.5).
     let ray = Ray {
-        o: Vec3::new(-0.5, 0.5, 0.5),
-        d: Vec3::X,
+        o: Vec3A::new(-0.5, 0.5, 0.5),
+        d: Vec3A::X,
     };
     let h = 0.5 / n as f64;
     // s(x) for the clamped ramp ρ(u) = 2 N clamp(u, h, 1-h), u in [0, 1].
@@ -478,13 +478,17 @@ fn reciprocal_kernel_is_reciprocal() {
     // energy-conserving kernel's asymmetry comes from the boundary (in an
     // unbounded homogeneous medium both directions integrate to the same
     // value).
-    let (a, b, r) = (Vec3::new(0.0, 0.0, 0.0), Vec3::new(0.7, 0.0, 0.0), 0.25f32);
+    let (a, b, r) = (
+        Vec3A::new(0.0, 0.0, 0.0),
+        Vec3A::new(0.7, 0.0, 0.0),
+        0.25f32,
+    );
     let davis = r#"<string name="transmittance" value="davis"/><float name="alpha" value="0.5"/>"#;
     for (label, ty, body) in [models()[1], ("davis alpha=0.5", "nonexponential", davis)] {
         for kernel in ["reciprocal", "energy_conserving"] {
-            let run = |light: Vec3, probe: Vec3| {
+            let run = |light: Vec3A, probe: Vec3A| {
                 let m = medium_xml(ty, body, "1.5", "0.9", kernel, r#"id="m""#);
-                let ball = |c: Vec3, emit: bool| {
+                let ball = |c: Vec3A, emit: bool| {
                     format!(
                         r#"<shape type="sphere"><point name="center" x="{}" y="{}" z="{}"/><float name="radius" value="{r}"/><bsdf type="diffuse"><rgb name="reflectance" value="0"/></bsdf><ref name="exterior" id="m"/>{}</shape>"#,
                         c.x,
@@ -604,7 +608,7 @@ fn furnace_with_a_macro_density() {
                 let d = sample_uniform_sphere(s.next_2d());
                 world.li(
                     Ray {
-                        o: Vec3::new(0.1, 0.2, -0.3),
+                        o: Vec3A::new(0.1, 0.2, -0.3),
                         d,
                     },
                     f32::INFINITY,

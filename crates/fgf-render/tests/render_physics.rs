@@ -515,7 +515,16 @@ fn disk_light_on_ground_matches_quadrature() {
         let (mut sum, mut sum2) = (0.0f64, 0.0f64);
         for k in 0..m {
             let mut smp = Sampler::new(5, 0, k);
-            let v = world.li(Ray { o, d }, 1e4, &mut smp).x as f64;
+            let v = world
+                .li(
+                    Ray {
+                        o: o.into(),
+                        d: d.into(),
+                    },
+                    1e4,
+                    &mut smp,
+                )
+                .x as f64;
             sum += v;
             sum2 += v * v;
         }

@@ -19,7 +19,7 @@
 //! respect to the value.
 
 use crate::math::sample_concentric_disk;
-use glam::Vec3;
+use glam::Vec3A;
 use std::f32::consts::PI;
 
 /// Which distribution of microfacet normals.
@@ -42,7 +42,7 @@ pub struct Microfacet {
 impl Microfacet {
     /// `D(m)`, normalised so that `∫ D(m) cos θ_m dω = 1`.
     #[inline]
-    pub fn d(&self, m: Vec3) -> f32 {
+    pub fn d(&self, m: Vec3A) -> f32 {
         if m.z <= 0.0 {
             return 0.0;
         }
@@ -62,14 +62,14 @@ impl Microfacet {
 
     /// `α(φ_v)² tan²θ_v` of direction `v`.
     #[inline]
-    fn a2tan2(&self, v: Vec3) -> f32 {
+    fn a2tan2(&self, v: Vec3A) -> f32 {
         ((v.x * self.ax).powi(2) + (v.y * self.ay).powi(2)) / (v.z * v.z)
     }
 
     /// Smith's `G1(v, m)` as evaluated in the BSDF value (Beckmann: the
     /// rational approximation of Walter et al. 2007, eq. 27).
     #[inline]
-    pub fn g1(&self, v: Vec3, m: Vec3) -> f32 {
+    pub fn g1(&self, v: Vec3A, m: Vec3A) -> f32 {
         if v.dot(m) * v.z <= 0.0 {
             return 0.0;
         }
@@ -93,7 +93,7 @@ impl Microfacet {
     /// The exact Smith `G1(v, m) = 1 / (1 + Λ(v))`, the normalisation of
     /// the distribution of visible normals.
     #[inline]
-    pub fn g1_exact(&self, v: Vec3, m: Vec3) -> f32 {
+    pub fn g1_exact(&self, v: Vec3A, m: Vec3A) -> f32 {
         match self.kind {
             Distribution::Ggx => self.g1(v, m),
             Distribution::Beckmann => {
@@ -114,14 +114,14 @@ impl Microfacet {
 
     /// Separable shadowing–masking `G1(wi, m) G1(wo, m)`.
     #[inline]
-    pub fn g(&self, wi: Vec3, wo: Vec3, m: Vec3) -> f32 {
+    pub fn g(&self, wi: Vec3A, wo: Vec3A, m: Vec3A) -> f32 {
         self.g1(wi, m) * self.g1(wo, m)
     }
 
     /// Density of [`Self::sample`] at normal `m` (solid angle of `m`), for
     /// `wi.z > 0`.
     #[inline]
-    pub fn pdf(&self, wi: Vec3, m: Vec3) -> f32 {
+    pub fn pdf(&self, wi: Vec3A, m: Vec3A) -> f32 {
         if self.visible {
             self.g1_exact(wi, m) * wi.dot(m).max(0.0) * self.d(m) / wi.z
         } else {
@@ -130,7 +130,7 @@ impl Microfacet {
     }
 
     /// Sample a microfacet normal for `wi.z > 0`.
-    pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
+    pub fn sample(&self, wi: Vec3A, u: [f32; 2]) -> Vec3A {
         if self.visible {
             match self.kind {
                 Distribution::Ggx => self.sample_visible_ggx(wi, u),
@@ -142,7 +142,7 @@ impl Microfacet {
     }
 
     /// `D(m) cos θ_m`: φ from the anisotropic ellipse, then θ by inversion.
-    fn sample_all(&self, u: [f32; 2]) -> Vec3 {
+    fn sample_all(&self, u: [f32; 2]) -> Vec3A {
         let psi = 2.0 * PI * u[1];
         let (sp, cp) = (self.ay * psi.sin(), self.ax * psi.cos());
         let r = (sp * sp + cp * cp).sqrt();
@@ -154,16 +154,16 @@ impl Microfacet {
         };
         let cos_t = 1.0 / (1.0 + tan2).sqrt();
         let sin_t = (1.0 - cos_t * cos_t).max(0.0).sqrt();
-        Vec3::new(sin_t * cos_phi, sin_t * sin_phi, cos_t)
+        Vec3A::new(sin_t * cos_phi, sin_t * sin_phi, cos_t)
     }
 
-    fn sample_visible_ggx(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
-        let vh = Vec3::new(self.ax * wi.x, self.ay * wi.y, wi.z).normalize();
+    fn sample_visible_ggx(&self, wi: Vec3A, u: [f32; 2]) -> Vec3A {
+        let vh = Vec3A::new(self.ax * wi.x, self.ay * wi.y, wi.z).normalize();
         let len2 = vh.x * vh.x + vh.y * vh.y;
         let t1 = if len2 > 0.0 {
-            Vec3::new(-vh.y, vh.x, 0.0) / len2.sqrt()
+            Vec3A::new(-vh.y, vh.x, 0.0) / len2.sqrt()
         } else {
-            Vec3::X
+            Vec3A::X
         };
         let t2 = vh.cross(t1);
         // A uniform point on the unit disk (concentric map, as Mitsuba 3:
@@ -174,12 +174,12 @@ impl Microfacet {
         let s = 0.5 * (1.0 + vh.z);
         let p2 = (1.0 - s) * (1.0 - p1 * p1).max(0.0).sqrt() + s * q;
         let nh = p1 * t1 + p2 * t2 + (1.0 - p1 * p1 - p2 * p2).max(0.0).sqrt() * vh;
-        Vec3::new(self.ax * nh.x, self.ay * nh.y, nh.z.max(1e-6)).normalize()
+        Vec3A::new(self.ax * nh.x, self.ay * nh.y, nh.z.max(1e-6)).normalize()
     }
 
-    fn sample_visible_beckmann(&self, wi: Vec3, u: [f32; 2]) -> Vec3 {
+    fn sample_visible_beckmann(&self, wi: Vec3A, u: [f32; 2]) -> Vec3A {
         // Stretch to the unit-roughness configuration.
-        let vh = Vec3::new(self.ax * wi.x, self.ay * wi.y, wi.z).normalize();
+        let vh = Vec3A::new(self.ax * wi.x, self.ay * wi.y, wi.z).normalize();
         let sin_t = (vh.x * vh.x + vh.y * vh.y).sqrt();
         let (cos_phi, sin_phi) = if sin_t > 1e-7 {
             (vh.x / sin_t, vh.y / sin_t)
@@ -197,7 +197,7 @@ impl Microfacet {
         let (x, y) = (x as f32, y as f32);
         let sx = (cos_phi * x - sin_phi * y) * self.ax;
         let sy = (sin_phi * x + cos_phi * y) * self.ay;
-        Vec3::new(-sx, -sy, 1.0).normalize()
+        Vec3A::new(-sx, -sy, 1.0).normalize()
     }
 }
 
@@ -268,7 +268,7 @@ fn erf_inv(y: f64) -> f64 {
 
 /// Mirror `wi` about the normal `m`.
 #[inline]
-pub fn reflect(wi: Vec3, m: Vec3) -> Vec3 {
+pub fn reflect(wi: Vec3A, m: Vec3A) -> Vec3A {
     2.0 * wi.dot(m) * m - wi
 }
 

@@ -45,7 +45,7 @@ use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::Spectrum;
 use crate::texture::Texture;
 use fgf_scene::{BsdfDesc, MicrofacetDesc, MicrofacetKind, TexturedParam};
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3A};
 use microfacet::{Distribution, Microfacet};
 use plastic::{Plastic, RoughPlastic};
 use principled::Principled;
@@ -126,7 +126,7 @@ pub struct Bsdf {
 #[derive(Debug, Clone, Copy)]
 pub struct BsdfSample {
     /// Sampled direction in the local frame.
-    pub wo: Vec3,
+    pub wo: Vec3A,
     /// `f·|cos| / pdf` (for a delta lobe, the lobe weight over its choice probability).
     pub weight: Spectrum,
     /// Solid-angle pdf; for delta lobes the discrete choice probability.
@@ -417,7 +417,7 @@ impl Bsdf {
     /// passes straight through (Mitsuba's `eval_null_transmission`): 1 for
     /// `null`, `(1 − R')·T` for `thindielectric`, `1 − opacity·(1 − nested)`
     /// for `mask`, 0 for the others.
-    pub fn null_transmission(&self, wi: Vec3) -> Spectrum {
+    pub fn null_transmission(&self, wi: Vec3A) -> Spectrum {
         match &self.kind {
             BsdfKind::Null => Spectrum::ONE,
             &BsdfKind::ThinDielectric { eta, t, .. } => {
@@ -451,7 +451,7 @@ impl Bsdf {
     /// The diffuse case stays inline (the hot path of the reference scenes);
     /// the other models are evaluated out of line.
     #[inline]
-    pub fn eval_pdf(&self, mut wi: Vec3, mut wo: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, mut wi: Vec3A, mut wo: Vec3A) -> (Spectrum, f32) {
         if self.twosided && wi.z < 0.0 {
             wi.z = -wi.z;
             wo.z = -wo.z;
@@ -469,7 +469,7 @@ impl Bsdf {
     }
 
     #[inline(never)]
-    fn eval_pdf_glossy(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+    fn eval_pdf_glossy(&self, wi: Vec3A, wo: Vec3A) -> (Spectrum, f32) {
         match &self.kind {
             BsdfKind::RoughConductor(b) => b.eval_pdf(wi, wo),
             BsdfKind::RoughDielectric(b) => b.eval_pdf(wi, wo),
@@ -489,7 +489,7 @@ impl Bsdf {
     /// As in [`Self::eval_pdf`], the diffuse case stays inline and the other
     /// models are sampled out of line.
     #[inline]
-    pub fn sample(&self, mut wi: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
+    pub fn sample(&self, mut wi: Vec3A, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
         let BsdfKind::Diffuse { reflectance } = &self.kind else {
             return self.sample_other(wi, u1, u2);
         };
@@ -520,7 +520,7 @@ impl Bsdf {
 
     /// [`Self::sample`] for every model but the diffuse one.
     #[inline(never)]
-    fn sample_other(&self, mut wi: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
+    fn sample_other(&self, mut wi: Vec3A, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
         let flipped = self.twosided && wi.z < 0.0;
         if flipped {
             wi.z = -wi.z;
@@ -539,7 +539,7 @@ impl Bsdf {
                 let f = fresnel_dielectric(wi.z, eta);
                 if u1 < f.r {
                     BsdfSample {
-                        wo: Vec3::new(-wi.x, -wi.y, wi.z),
+                        wo: Vec3A::new(-wi.x, -wi.y, wi.z),
                         weight: r,
                         pdf: f.r,
                         delta: true,
@@ -548,7 +548,7 @@ impl Bsdf {
                     }
                 } else {
                     // Refracted direction: tangential part scaled by η_i/η_t.
-                    let wo = Vec3::new(-f.eta_ti * wi.x, -f.eta_ti * wi.y, f.cos_t);
+                    let wo = Vec3A::new(-f.eta_ti * wi.x, -f.eta_ti * wi.y, f.cos_t);
                     // Radiance is compressed into the smaller solid angle on
                     // the denser side: scale by (η_i/η_t)².
                     BsdfSample {
@@ -567,7 +567,7 @@ impl Bsdf {
                 let rr = if f < 1.0 { 2.0 * f / (1.0 + f) } else { 1.0 };
                 if u1 < rr {
                     BsdfSample {
-                        wo: Vec3::new(-wi.x, -wi.y, wi.z),
+                        wo: Vec3A::new(-wi.x, -wi.y, wi.z),
                         weight: r,
                         pdf: rr,
                         delta: true,
@@ -616,7 +616,7 @@ impl Bsdf {
                     fresnel_conductor_rgb(wi.z, eta, k)
                 };
                 BsdfSample {
-                    wo: Vec3::new(-wi.x, -wi.y, wi.z),
+                    wo: Vec3A::new(-wi.x, -wi.y, wi.z),
                     weight: r * fr,
                     pdf: 1.0,
                     delta: true,

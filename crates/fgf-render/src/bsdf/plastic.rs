@@ -21,7 +21,7 @@ use super::microfacet::{reflect, Microfacet};
 use super::BsdfSample;
 use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::{mean, Spectrum};
-use glam::Vec3;
+use glam::Vec3A;
 use rayon::prelude::*;
 use std::f32::consts::FRAC_1_PI;
 
@@ -111,7 +111,7 @@ impl Plastic {
     }
 
     /// The diffuse lobe only (the specular one is a delta).
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, wi: Vec3A, wo: Vec3A) -> (Spectrum, f32) {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Spectrum::ZERO, 0.0);
         }
@@ -122,7 +122,7 @@ impl Plastic {
         (f, pd * cosine_hemisphere_pdf(wo.z))
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3A, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -130,7 +130,7 @@ impl Plastic {
         let ps = self.c.prob_specular(1.0 - fi);
         if u1 < ps {
             return Some(BsdfSample {
-                wo: Vec3::new(-wi.x, -wi.y, wi.z),
+                wo: Vec3A::new(-wi.x, -wi.y, wi.z),
                 weight: self.c.specular * (fi / ps),
                 pdf: ps,
                 delta: true,
@@ -205,13 +205,13 @@ fn visible_average(
     distr: &Microfacet,
     mu: f32,
     n: usize,
-    g: impl Fn(Vec3, Vec3, &Microfacet) -> f32,
+    g: impl Fn(Vec3A, Vec3A, &Microfacet) -> f32,
 ) -> f32 {
     let visible = Microfacet {
         visible: true,
         ..*distr
     };
-    let wi = Vec3::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
+    let wi = Vec3A::new((1.0 - mu * mu).max(0.0).sqrt(), 0.0, mu);
     let nodes = gauss_legendre_01(n);
     let mut sum = 0.0f64;
     for &(x, wx) in &nodes {
@@ -340,7 +340,7 @@ impl RoughPlastic {
         (1.0 - w) * self.t_ext[i] + w * self.t_ext[i + 1]
     }
 
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, wi: Vec3A, wo: Vec3A) -> (Spectrum, f32) {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Spectrum::ZERO, 0.0);
         }
@@ -360,7 +360,7 @@ impl RoughPlastic {
         (f, pdf)
     }
 
-    pub fn sample(&self, wi: Vec3, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3A, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -466,7 +466,7 @@ mod tests {
                 ..d
             };
             let mu = 0.05f32;
-            let wi = Vec3::new((1.0 - mu * mu).sqrt(), 0.0, mu);
+            let wi = Vec3A::new((1.0 - mu * mu).sqrt(), 0.0, mu);
             let n = 1000usize;
             let mut direct = 0.0f64;
             for i in 0..n {
@@ -474,7 +474,7 @@ mod tests {
                 let r = (1.0 - z * z).sqrt();
                 for j in 0..n {
                     let phi = std::f64::consts::TAU * (j as f64 + 0.5) / n as f64;
-                    let m = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                    let m = Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
                     let ci = wi.dot(m);
                     if ci <= 0.0 {
                         continue;

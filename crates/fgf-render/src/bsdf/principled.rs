@@ -42,7 +42,7 @@ use super::microfacet::{reflect, Distribution, Microfacet};
 use super::{fresnel_dielectric, BsdfSample};
 use crate::math::sample_cosine_hemisphere;
 use crate::spectrum::Spectrum;
-use glam::Vec3;
+use glam::Vec3A;
 use std::f32::consts::{FRAC_1_PI, PI};
 
 /// The principled BSDF's parameters at one surface point.
@@ -110,7 +110,7 @@ fn gtr1(a: f32, cos_m: f32) -> f32 {
 
 /// Smith's GGX `G1` of roughness `a` for the clearcoat.
 #[inline]
-fn smith_ggx1(v: Vec3, m: Vec3, a: f32) -> f32 {
+fn smith_ggx1(v: Vec3A, m: Vec3A, a: f32) -> f32 {
     if v.dot(m) * v.z <= 0.0 {
         return 0.0;
     }
@@ -125,7 +125,7 @@ fn smith_ggx1(v: Vec3, m: Vec3, a: f32) -> f32 {
 /// `m` turned to the side of `s` (`m·sign(s)`, as Drjit's `mulsign`: a
 /// negative zero counts as negative).
 #[inline]
-fn mulsign(m: Vec3, s: f32) -> Vec3 {
+fn mulsign(m: Vec3A, s: f32) -> Vec3A {
     if s.is_sign_negative() {
         -m
     } else {
@@ -137,7 +137,7 @@ fn mulsign(m: Vec3, s: f32) -> Vec3 {
 /// macro surface's incident side (reflection), or `wo` on the other side
 /// (refraction).
 #[inline]
-fn compatible(m: Vec3, wi: Vec3, wo: Vec3, cos_i: f32, reflection: bool) -> bool {
+fn compatible(m: Vec3A, wi: Vec3A, wo: Vec3A, cos_i: f32, reflection: bool) -> bool {
     let m = mulsign(m, cos_i);
     wi.dot(m) > 0.0
         && if reflection {
@@ -228,7 +228,7 @@ impl Principled {
 
     /// `f(wi, wo)·|cos θ_o|` and the pdf of [`Self::sample`] as Mitsuba
     /// computes it.
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, wi: Vec3A, wo: Vec3A) -> (Spectrum, f32) {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return (Spectrum::ZERO, 0.0);
@@ -332,7 +332,7 @@ impl Principled {
     /// Mitsuba's sampling: a lobe by `u1` with probabilities from the
     /// Fresnel term at a visible normal drawn from `u2`, then a direction of
     /// that lobe from the same `u2`.
-    pub fn sample(&self, wi: Vec3, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3A, u1: f32, u2: [f32; 2]) -> Option<BsdfSample> {
         let cos_i = wi.z;
         if cos_i == 0.0 {
             return None;
@@ -357,7 +357,7 @@ impl Principled {
             let cos2 = (1.0 - a2.powf(1.0 - u2[1])) / (1.0 - a2);
             let (sin_t, cos_t) = ((1.0 - cos2).max(0.0).sqrt(), cos2.max(0.0).sqrt());
             let phi = 2.0 * PI * u2[0];
-            let mc = Vec3::new(phi.cos() * sin_t, phi.sin() * sin_t, cos_t);
+            let mc = Vec3A::new(phi.cos() * sin_t, phi.sin() * sin_t, cos_t);
             let wo = reflect(wi, mc);
             if !(compatible(mc, wi, wo, cos_i, true) && cos_i * wo.z > 0.0) {
                 return None;

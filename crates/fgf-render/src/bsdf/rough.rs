@@ -9,7 +9,7 @@ use super::fresnel::{fresnel_conductor_rgb, fresnel_dielectric};
 use super::microfacet::{reflect, Microfacet};
 use super::BsdfSample;
 use crate::spectrum::Spectrum;
-use glam::Vec3;
+use glam::Vec3A;
 
 /// A rough metal: `F(wi·m) D(m) G / (4 cos θ_i)` per channel.
 #[derive(Debug, Clone, Copy)]
@@ -31,7 +31,7 @@ impl RoughConductor {
         }
     }
 
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, wi: Vec3A, wo: Vec3A) -> (Spectrum, f32) {
         if wi.z <= 0.0 || wo.z <= 0.0 {
             return (Spectrum::ZERO, 0.0);
         }
@@ -48,7 +48,7 @@ impl RoughConductor {
         (f, pdf)
     }
 
-    pub fn sample(&self, wi: Vec3, u: [f32; 2]) -> Option<BsdfSample> {
+    pub fn sample(&self, wi: Vec3A, u: [f32; 2]) -> Option<BsdfSample> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -84,7 +84,7 @@ impl RoughDielectric {
     /// `wi` and `wo` seen from the side of `wi` (both negated if `wi` is
     /// inside) and the relative index `η_t/η_i` for that side.
     #[inline]
-    fn upper(&self, wi: Vec3, wo: Vec3) -> (Vec3, Vec3, f32) {
+    fn upper(&self, wi: Vec3A, wo: Vec3A) -> (Vec3A, Vec3A, f32) {
         if wi.z >= 0.0 {
             (wi, wo, self.eta)
         } else {
@@ -92,7 +92,7 @@ impl RoughDielectric {
         }
     }
 
-    pub fn eval_pdf(&self, wi: Vec3, wo: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, wi: Vec3A, wo: Vec3A) -> (Spectrum, f32) {
         if wi.z == 0.0 || wo.z == 0.0 {
             return (Spectrum::ZERO, 0.0);
         }
@@ -124,12 +124,12 @@ impl RoughDielectric {
         }
     }
 
-    pub fn sample(&self, wi_in: Vec3, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
+    pub fn sample(&self, wi_in: Vec3A, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
         if wi_in.z == 0.0 {
             return None;
         }
         let sign = wi_in.z.signum();
-        let (wi, _, eta) = self.upper(wi_in, Vec3::Z);
+        let (wi, _, eta) = self.upper(wi_in, Vec3A::Z);
         let m = self.distr.sample(wi, u);
         let ci_m = wi.dot(m);
         if ci_m <= 0.0 {

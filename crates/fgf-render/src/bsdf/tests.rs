@@ -37,7 +37,7 @@ fn refraction_obeys_snell() {
         twosided: false,
         textures: None,
     };
-    let wi = Vec3::new(0.6, 0.0, 0.8);
+    let wi = Vec3A::new(0.6, 0.0, 0.8);
     let s = b.sample(wi, 0.999, [0.0, 0.0]).unwrap();
     let sin_i = 0.6f32;
     let sin_t = (s.wo.x * s.wo.x + s.wo.y * s.wo.y).sqrt();
@@ -129,13 +129,13 @@ fn cases() -> Vec<(String, Bsdf)> {
     v
 }
 
-fn incident() -> [Vec3; 4] {
+fn incident() -> [Vec3A; 4] {
     [
-        Vec3::new(0.0, 0.0, 1.0),
-        Vec3::new(0.5, 0.1, 0.86).normalize(),
-        Vec3::new(0.9, -0.2, 0.25).normalize(),
+        Vec3A::new(0.0, 0.0, 1.0),
+        Vec3A::new(0.5, 0.1, 0.86).normalize(),
+        Vec3A::new(0.9, -0.2, 0.25).normalize(),
         // From inside (only the dielectric answers).
-        Vec3::new(0.3, 0.2, -0.9).normalize(),
+        Vec3A::new(0.3, 0.2, -0.9).normalize(),
     ]
 }
 
@@ -208,7 +208,7 @@ fn sampling_matches_pdf_chi_square() {
                         let (st, ct) = theta.sin_cos();
                         for c in 0..sub_p {
                             let phi = dphi * (ip as f64 + (c as f64 + 0.5) / sub_p as f64);
-                            let wo = Vec3::new(
+                            let wo = Vec3A::new(
                                 (st * phi.cos()) as f32,
                                 (st * phi.sin()) as f32,
                                 ct as f32,
@@ -330,7 +330,7 @@ fn beckmann_visible_normals_have_unit_projected_area() {
                     let z = (i as f64 + 0.5) / n as f64;
                     let phi = std::f64::consts::TAU * (j as f64 + 0.5) / n as f64;
                     let r = (1.0 - z * z).sqrt();
-                    let m = Vec3::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
+                    let m = Vec3A::new((r * phi.cos()) as f32, (r * phi.sin()) as f32, z as f32);
                     acc += d.pdf(*wi, m) as f64;
                 }
             }
@@ -375,8 +375,8 @@ fn mask_scales_the_nested_bsdf() {
         }),
     });
     assert!(m.is_smooth() && m.has_null_lobe() && !m.is_null());
-    let wi = Vec3::new(0.6, 0.0, 0.8);
-    let wo = Vec3::new(-0.3, 0.4, (1.0f32 - 0.25).sqrt());
+    let wi = Vec3A::new(0.6, 0.0, 0.8);
+    let wo = Vec3A::new(-0.3, 0.4, (1.0f32 - 0.25).sqrt());
     let (f, p) = m.eval_pdf(wi, wo);
     let (fd, pd) = diffuse.eval_pdf(wi, wo);
     assert!((f - 0.3 * fd).abs().max_element() < 1e-7 && (p - 0.3 * pd).abs() < 1e-7);

@@ -16,7 +16,7 @@
 
 use crate::spectrum::Spectrum;
 use fgf_scene::RgbImage;
-use glam::{Mat3, Mat4, Vec3};
+use glam::{Mat3, Mat4, Vec3A};
 use std::f32::consts::PI;
 
 #[derive(Debug, Clone)]
@@ -166,7 +166,7 @@ impl Envmap {
 
     /// Grid coordinates `(u - ½/W wrapped, v)` and `sin θ` of a world direction.
     #[inline]
-    fn grid_uv(&self, d: Vec3) -> (f32, f32, f32) {
+    fn grid_uv(&self, d: Vec3A) -> (f32, f32, f32) {
         let l = (self.to_local * d).normalize();
         let u = l.x.atan2(-l.z) * (0.5 / PI) - 0.5 / self.w as f32;
         let v = l.y.clamp(-1.0, 1.0).acos() * (1.0 / PI);
@@ -176,7 +176,7 @@ impl Envmap {
 
     /// Radiance arriving from world direction `d` (toward the environment).
     #[inline]
-    pub fn eval(&self, d: Vec3) -> Spectrum {
+    pub fn eval(&self, d: Vec3A) -> Spectrum {
         let (u, v, _) = self.grid_uv(d);
         self.lookup(u, v)
     }
@@ -205,7 +205,7 @@ impl Envmap {
 
     /// Solid-angle pdf of [`Self::sample`] producing world direction `d`.
     #[inline]
-    pub fn pdf(&self, d: Vec3) -> f32 {
+    pub fn pdf(&self, d: Vec3A) -> f32 {
         let (u, v, sin_t) = self.grid_uv(d);
         self.pdf_at(u, v, sin_t)
     }
@@ -221,13 +221,13 @@ impl Envmap {
     /// [`Self::eval`] and [`Self::pdf`] of one direction, which they share
     /// the costly mapping to the image of.
     #[inline]
-    pub fn eval_pdf(&self, d: Vec3) -> (Spectrum, f32) {
+    pub fn eval_pdf(&self, d: Vec3A) -> (Spectrum, f32) {
         let (u, v, sin_t) = self.grid_uv(d);
         (self.lookup(u, v), self.pdf_at(u, v, sin_t))
     }
 
     /// A world direction toward the environment, its radiance and pdf.
-    pub fn sample(&self, u: [f32; 2]) -> Option<(Vec3, Spectrum, f32)> {
+    pub fn sample(&self, u: [f32; 2]) -> Option<(Vec3A, Spectrum, f32)> {
         let (nx, ny) = (self.w, self.h - 1);
         let (j, fv) = self.row_guide.pick(&self.row_cdf, u[1]);
         let (i, fu) = self.col_guide[j].pick(&self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)], u[0]);
@@ -240,7 +240,7 @@ impl Envmap {
             return None;
         }
         let (sp, cp) = phi.sin_cos();
-        let local = Vec3::new(sp * st, ct, -cp * st);
+        let local = Vec3A::new(sp * st, ct, -cp * st);
         let d = (self.to_world * local).normalize();
         let pdf = self.cell_pdf[j * nx + i] / (2.0 * PI * PI * st);
         if !(pdf > 0.0) {

@@ -25,7 +25,7 @@ use crate::spectrum::{from_rgb, Spectrum};
 use crate::texture::Texture;
 use envmap::Envmap;
 use fgf_scene::EmitterDesc;
-use glam::{Mat3, Vec3};
+use glam::{Mat3, Vec3A};
 use std::sync::Arc;
 
 #[derive(Debug, Clone)]
@@ -42,18 +42,18 @@ pub enum Emitter {
         texture: Arc<Texture>,
     },
     Point {
-        p: Vec3,
+        p: Vec3A,
         intensity: Spectrum,
     },
     Spot {
-        p: Vec3,
+        p: Vec3A,
         to_local: Mat3,
         intensity: Spectrum,
         cutoff: f32,
         beam: f32,
     },
     Directional {
-        d: Vec3,
+        d: Vec3A,
         irradiance: Spectrum,
     },
     Constant {
@@ -66,7 +66,7 @@ pub enum Emitter {
 #[derive(Debug, Clone, Copy)]
 pub struct LightSample {
     /// Unit direction from the reference point toward the light.
-    pub wi: Vec3,
+    pub wi: Vec3A,
     /// Distance to the sampled point (infinite for directional and environment lights).
     pub dist: f32,
     /// Emitted radiance (area, environment), intensity/dist² (point, spot),
@@ -90,7 +90,7 @@ fn texture_at_hit(t: &Texture, geom: &Geometry, hit: &Hit) -> Spectrum {
 fn area_sample(
     geom: &Geometry,
     shape: u32,
-    p: Vec3,
+    p: Vec3A,
     ps: PositionSample,
     value: impl FnOnce(&PositionSample) -> Spectrum,
 ) -> Option<LightSample> {
@@ -124,7 +124,7 @@ fn textured_area_sample(
     t: &Texture,
     geom: &Geometry,
     shape: u32,
-    p: Vec3,
+    p: Vec3A,
     u_sel: f32,
     u: [f32; 2],
 ) -> Option<LightSample> {
@@ -157,7 +157,7 @@ impl Emitter {
                 position,
                 intensity,
             } => Emitter::Point {
-                p: *position,
+                p: (*position).into(),
                 intensity: from_rgb(*intensity),
             },
             EmitterDesc::Spot {
@@ -172,7 +172,7 @@ impl Emitter {
                 let to_local = l.inverse();
                 let cutoff = cutoff_angle.to_radians();
                 Emitter::Spot {
-                    p: to_world.w_axis.truncate(),
+                    p: to_world.w_axis.truncate().into(),
                     to_local,
                     intensity: from_rgb(*intensity),
                     cutoff,
@@ -183,7 +183,7 @@ impl Emitter {
                 direction,
                 irradiance,
             } => Emitter::Directional {
-                d: direction.normalize(),
+                d: direction.normalize().into(),
                 irradiance: from_rgb(*irradiance),
             },
             EmitterDesc::Constant { radiance } => Emitter::Constant {
@@ -199,7 +199,7 @@ impl Emitter {
     /// escapes in direction `d`, and the solid-angle pdf with which
     /// [`Self::sample`] picks `d` (for MIS).
     #[inline(always)]
-    pub fn environment(&self, d: Vec3) -> Option<(Spectrum, f32)> {
+    pub fn environment(&self, d: Vec3A) -> Option<(Spectrum, f32)> {
         match self {
             Emitter::Constant { radiance } => Some((*radiance, UNIFORM_SPHERE_PDF)),
             Emitter::Envmap(e) => Some(e.eval_pdf(d)),
@@ -239,7 +239,13 @@ impl Emitter {
     }
 
     /// Sample a direction toward the light from `p`.
-    pub fn sample(&self, geom: &Geometry, p: Vec3, u_sel: f32, u: [f32; 2]) -> Option<LightSample> {
+    pub fn sample(
+        &self,
+        geom: &Geometry,
+        p: Vec3A,
+        u_sel: f32,
+        u: [f32; 2],
+    ) -> Option<LightSample> {
         match *self {
             Emitter::Area { shape, radiance } => area_sample(
                 geom,

@@ -437,13 +437,13 @@ pub fn ensemble_from(
 
 #[cfg(test)]
 mod tests {
-    use glam::{DVec3, Mat4, Vec3};
+    use glam::{DVec3, Mat4, Vec3A};
 
     #[test]
     fn unit_cube_maps_onto_the_grid_box() {
         let (lo, ext) = (DVec3::new(-0.5, 0.25, -0.5), DVec3::new(1.0, 1.0, 2.0));
         let m = Mat4::from_translation(lo.as_vec3()) * Mat4::from_scale(ext.as_vec3());
-        assert!((m.transform_point3(Vec3::ZERO) - lo.as_vec3()).length() < 1e-6);
-        assert!((m.transform_point3(Vec3::ONE) - (lo + ext).as_vec3()).length() < 1e-6);
+        assert!((m.transform_point3a(Vec3A::ZERO) - lo.as_vec3a()).length() < 1e-6);
+        assert!((m.transform_point3a(Vec3A::ONE) - (lo + ext).as_vec3a()).length() < 1e-6);
     }
 }

@@ -112,7 +112,7 @@ pub(super) fn plan(scene: &SceneDesc, opts: &EnsembleOptions) -> Result<Vec<Plan
                         for x in 0..n[0] {
                             let p = lo
                                 + DVec3::new(x as f64 + 0.5, y as f64 + 0.5, z as f64 + 0.5) * dx;
-                            v.push(tex.eval_world(p.as_vec3()).x);
+                            v.push(tex.eval_world(p.as_vec3a()).x);
                         }
                     }
                 }

@@ -10,7 +10,7 @@ use super::uv::cube_uv;
 use super::Geometry;
 use crate::error::RenderError;
 use fgf_scene::{GeometryDesc, ShapeDesc};
-use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3};
+use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3A};
 use std::f32::consts::PI;
 
 /// Faces of a mesh: triangles, or parallelograms given by their corners in
@@ -77,7 +77,7 @@ fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
 #[derive(Default)]
 struct Builder {
     tris: Vec<Tri>,
-    vertex_normals: Vec<[Vec3; 3]>,
+    vertex_normals: Vec<[Vec3A; 3]>,
     tri_uvs: Vec<[Vec2; 3]>,
     spheres: Vec<Sphere>,
     sphere_to_local: Vec<Mat3>,
@@ -113,10 +113,10 @@ impl Builder {
                 let mut idx = Vec::new();
                 for axis in 0..3 {
                     for s in [1.0f32, -1.0] {
-                        let mut nrm = Vec3::ZERO;
+                        let mut nrm = Vec3A::ZERO;
                         nrm[axis] = s;
-                        let mut u = Vec3::ZERO;
-                        let mut v = Vec3::ZERO;
+                        let mut u = Vec3A::ZERO;
+                        let mut v = Vec3A::ZERO;
                         u[(axis + 1) % 3] = 1.0;
                         v[(axis + 2) % 3] = 1.0;
                         // u × v = +e_axis; swap for the negative face so
@@ -136,10 +136,10 @@ impl Builder {
             }
             GeometryDesc::Rectangle => {
                 let pos = [
-                    Vec3::new(-1.0, -1.0, 0.0),
-                    Vec3::new(1.0, -1.0, 0.0),
-                    Vec3::new(1.0, 1.0, 0.0),
-                    Vec3::new(-1.0, 1.0, 0.0),
+                    Vec3A::new(-1.0, -1.0, 0.0),
+                    Vec3A::new(1.0, -1.0, 0.0),
+                    Vec3A::new(1.0, 1.0, 0.0),
+                    Vec3A::new(-1.0, 1.0, 0.0),
                 ];
                 // Analytic in Mitsuba: its normal is the transformed +z
                 // normal, which differs from the winding when det < 0.
@@ -163,7 +163,7 @@ impl Builder {
                 self.prims.push((KIND_SPHERE << KIND_SHIFT) | i);
                 self.sphere_to_local.push(Mat3::from_mat4(m).inverse());
                 self.spheres.push(Sphere {
-                    center: m.transform_point3(*center),
+                    center: m.transform_point3a((*center).into()),
                     radius: r,
                     sign: flip,
                     shape: sid,
@@ -172,7 +172,7 @@ impl Builder {
             GeometryDesc::Disk => {
                 let to_world = Affine3A::from_mat4(m);
                 let to_local = to_world.inverse();
-                let n = (to_local.matrix3.transpose() * Vec3::Z).normalize() * flip;
+                let n = (to_local.matrix3.transpose() * Vec3A::Z).normalize() * flip;
                 let (x, y) = (to_world.matrix3.x_axis, to_world.matrix3.y_axis);
                 self.areas.push(PI * x.cross(y).length());
                 let i = self.disks.len() as u32;
@@ -189,21 +189,21 @@ impl Builder {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn add_mesh(
+    fn add_mesh<P: Copy + Into<Vec3A>>(
         &mut self,
         sid: u32,
         m: &Mat4,
-        pos: &[Vec3],
-        normals: Option<&[Vec3]>,
+        pos: &[P],
+        normals: Option<&[glam::Vec3]>,
         uvs: Option<&[Vec2]>,
         faces: Faces,
         sign: f32,
     ) {
-        let wp: Vec<Vec3> = pos.iter().map(|&p| m.transform_point3(p)).collect();
+        let wp: Vec<Vec3A> = pos.iter().map(|&p| m.transform_point3a(p.into())).collect();
         let nm = Mat3::from_mat4(*m).inverse().transpose();
-        let wn: Option<Vec<Vec3>> = normals.map(|ns| {
+        let wn: Option<Vec<Vec3A>> = normals.map(|ns| {
             ns.iter()
-                .map(|&n| (nm * n).normalize_or_zero() * sign)
+                .map(|&n| Vec3A::from(nm * n).normalize_or_zero() * sign)
                 .collect()
         });
         let first = self.tris.len() as u32;
@@ -216,7 +216,7 @@ impl Builder {
             let v0 = wp[i0 as usize];
             (v0, wp[i1 as usize] - v0, wp[i2 as usize] - v0)
         };
-        type Face = (Vec3, Vec3, Vec3, bool, Option<[u32; 3]>, [u32; 3]);
+        type Face = (Vec3A, Vec3A, Vec3A, bool, Option<[u32; 3]>, [u32; 3]);
         let corners: Vec<Face> = match faces {
             Faces::Tris(idx) => idx
                 .iter()
@@ -258,9 +258,9 @@ impl Builder {
                 _ => u32::MAX,
             };
             let tri = Tri {
-                v0: v0.into(),
-                e1: e1.into(),
-                e2: e2.into(),
+                v0,
+                e1,
+                e2,
                 n: c.normalize() * sign,
                 shape: sid,
                 normals: normals_idx,
@@ -287,12 +287,9 @@ impl Builder {
         match p >> KIND_SHIFT {
             KIND_TRI => {
                 let t = &self.tris[i];
-                let b = Aabb::EMPTY
-                    .grow(t.v0.into())
-                    .grow((t.v0 + t.e1).into())
-                    .grow((t.v0 + t.e2).into());
+                let b = Aabb::EMPTY.grow(t.v0).grow(t.v0 + t.e1).grow(t.v0 + t.e2);
                 if t.quad {
-                    b.grow((t.v0 + t.e1 + t.e2).into())
+                    b.grow(t.v0 + t.e1 + t.e2)
                 } else {
                     b
                 }
@@ -300,15 +297,15 @@ impl Builder {
             KIND_SPHERE => {
                 let s = &self.spheres[i];
                 Aabb {
-                    min: s.center - Vec3::splat(s.radius),
-                    max: s.center + Vec3::splat(s.radius),
+                    min: s.center - Vec3A::splat(s.radius),
+                    max: s.center + Vec3A::splat(s.radius),
                 }
             }
             _ => {
                 let d = &self.disks[i];
                 let mut b = Aabb::EMPTY;
                 for (x, y) in [(-1.0, -1.0), (1.0, -1.0), (1.0, 1.0), (-1.0, 1.0)] {
-                    b = b.grow(d.to_world.transform_point3(Vec3::new(x, y, 0.0)));
+                    b = b.grow(d.to_world.transform_point3a(Vec3A::new(x, y, 0.0)));
                 }
                 b
             }

@@ -23,19 +23,19 @@
 //! with two children hit 2.6 % more.
 
 use super::lanes8::F8;
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 /// Axis-aligned bounding box.
 #[derive(Debug, Clone, Copy)]
 pub struct Aabb {
-    pub min: Vec3,
-    pub max: Vec3,
+    pub min: Vec3A,
+    pub max: Vec3A,
 }
 
 impl Aabb {
     pub const EMPTY: Aabb = Aabb {
-        min: Vec3::splat(f32::INFINITY),
-        max: Vec3::splat(f32::NEG_INFINITY),
+        min: Vec3A::splat(f32::INFINITY),
+        max: Vec3A::splat(f32::NEG_INFINITY),
     };
 
     #[inline]
@@ -46,18 +46,18 @@ impl Aabb {
         }
     }
     #[inline]
-    pub fn grow(self, p: Vec3) -> Aabb {
+    pub fn grow(self, p: Vec3A) -> Aabb {
         Aabb {
             min: self.min.min(p),
             max: self.max.max(p),
         }
     }
     #[inline]
-    pub fn centroid(&self) -> Vec3 {
+    pub fn centroid(&self) -> Vec3A {
         0.5 * (self.min + self.max)
     }
     pub fn surface_area(&self) -> f32 {
-        let d = (self.max - self.min).max(Vec3::ZERO);
+        let d = (self.max - self.min).max(Vec3A::ZERO);
         2.0 * (d.x * d.y + d.y * d.z + d.z * d.x)
     }
     pub fn is_empty(&self) -> bool {
@@ -66,11 +66,12 @@ impl Aabb {
 
     /// Slab test; returns the entry and exit distances clipped to `[0, t_max]`.
     #[inline]
-    pub fn intersect(&self, o: Vec3, inv_d: Vec3, t_max: f32) -> Option<(f32, f32)> {
-        let t0 = (self.min - o) * inv_d;
-        let t1 = (self.max - o) * inv_d;
-        // `min`/`max` of glam ignore NaN operands the way we want when a
-        // direction component is 0 and the origin lies on a slab plane.
+    pub fn intersect(&self, o: Vec3A, inv_d: Vec3A, t_max: f32) -> Option<(f32, f32)> {
+        let t0 = glam::Vec3::from(self.min - o) * glam::Vec3::from(inv_d);
+        let t1 = glam::Vec3::from(self.max - o) * glam::Vec3::from(inv_d);
+        // `min`/`max` of glam's scalar `Vec3` ignore NaN operands the way we
+        // want when a direction component is 0 and the origin lies on a
+        // slab plane (those of the SIMD `Vec3A` would return them).
         let tn = t0.min(t1).max_element().max(0.0);
         let tf = t0.max(t1).min_element().min(t_max);
         // The factor 1 + 2γ(3) (pbrt) makes the test conservative against
@@ -86,8 +87,8 @@ impl Aabb {
 /// A node of the binary tree that the build makes.
 #[derive(Debug, Clone, Copy)]
 struct Node {
-    min: Vec3,
-    max: Vec3,
+    min: Vec3A,
+    max: Vec3A,
     /// Leaf: first primitive in `order`; interior: index of the second child
     /// (the first child follows the node directly).
     offset: u32,
@@ -187,7 +188,7 @@ impl Bvh {
     /// contiguously and tested in SIMD packs.
     pub fn build(bounds: &[Aabb]) -> (Bvh, Vec<Option<u32>>) {
         let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
-        let centroids: Vec<Vec3> = bounds.iter().map(|b| b.centroid()).collect();
+        let centroids: Vec<Vec3A> = bounds.iter().map(|b| b.centroid()).collect();
         let mut nodes = Vec::with_capacity(2 * bounds.len().max(1));
         if !bounds.is_empty() {
             build_rec(bounds, &centroids, &mut order, 0, bounds.len(), &mut nodes);
@@ -201,8 +202,8 @@ impl Bvh {
             stack_need: 0,
         };
         if let Some(root) = nodes.first() {
-            bvh.min = root.min.into();
-            bvh.max = root.max.into();
+            bvh.min = root.min;
+            bvh.max = root.max;
             if root.count > 0 {
                 bvh.root_leaf = (root.offset, root.count as u32);
             } else {
@@ -269,8 +270,8 @@ impl Bvh {
     /// Bounds of the whole scene (empty if there is nothing).
     pub fn bounds(&self) -> Aabb {
         Aabb {
-            min: self.min.into(),
-            max: self.max.into(),
+            min: self.min,
+            max: self.max,
         }
     }
 
@@ -282,13 +283,12 @@ impl Bvh {
     #[inline]
     pub fn traverse_leaves(
         &self,
-        o: Vec3,
-        d: Vec3,
+        o: Vec3A,
+        d: Vec3A,
         t_max: f32,
         mut hit: impl FnMut(u32, u32, f32) -> f32,
     ) -> f32 {
-        let inv_d = Vec3A::from(d).recip();
-        let o = Vec3A::from(o);
+        let inv_d = d.recip();
         // A root that is a leaf (scenes of a few primitives, such as the
         // reference ones) needs no stack, whose zeroing would cost about as
         // much as the box test.
@@ -472,7 +472,7 @@ fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool 
 
 fn build_rec(
     bounds: &[Aabb],
-    centroids: &[Vec3],
+    centroids: &[Vec3A],
     order: &mut [u32],
     start: usize,
     end: usize,
@@ -590,8 +590,8 @@ mod tests {
         let mut s = crate::math::Sampler::new(7, 0, 0);
         let boxes: Vec<Aabb> = (0..500)
             .map(|_| {
-                let c = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
-                let h = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.3;
+                let c = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+                let h = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.3;
                 Aabb {
                     min: c - h,
                     max: c + h,
@@ -605,7 +605,7 @@ mod tests {
         assert_eq!(listed, (0..boxes.len() as u32).collect::<Vec<_>>());
         assert_eq!(order.len() % PACK, 0);
         for _ in 0..200 {
-            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
+            let o = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 10.0;
             let d = crate::math::sample_uniform_sphere(s.next_2d());
             let mut visited = vec![false; boxes.len()];
             bvh.traverse_leaves(o, d, f32::INFINITY, |start, count, t| {
@@ -644,7 +644,7 @@ mod tests {
     #[test]
     fn wide_traversal_visits_every_hit_box() {
         let mut s = crate::math::Sampler::new(17, 0, 0);
-        let mut r3 = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let mut r3 = || Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
         let boxes: Vec<Aabb> = (0..5000)
             .map(|_| {
                 let c = r3() * 20.0;
@@ -671,7 +671,7 @@ mod tests {
                 )
             } else {
                 let b = boxes[k * 7 % boxes.len()];
-                let mut d = Vec3::ZERO;
+                let mut d = Vec3A::ZERO;
                 d[k / 2 % 3] = if k / 6 % 2 == 0 { 1.0 } else { -1.0 };
                 (if k % 4 == 1 { b.min } else { b.max }, d)
             };

@@ -27,17 +27,17 @@
 use super::types::{Hit, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
 use crate::math::Frame;
-use glam::Vec3;
+use glam::Vec3A;
 
 impl Geometry {
     /// `∂p/∂u` at `hit` (world space, not normalised; zero where the
     /// parameterisation is singular).
-    pub fn dp_du(&self, hit: &Hit) -> Vec3 {
+    pub fn dp_du(&self, hit: &Hit) -> Vec3A {
         let i = (hit.prim & INDEX_MASK) as usize;
         match hit.prim >> KIND_SHIFT {
             KIND_TRI => {
                 let t = &self.tris[i];
-                let (e1, e2) = (Vec3::from(t.e1), Vec3::from(t.e2));
+                let (e1, e2) = (t.e1, t.e2);
                 if t.uvs == u32::MAX {
                     return e1;
                 }
@@ -54,17 +54,17 @@ impl Geometry {
                 let s = &self.spheres[i];
                 let to_local = self.sphere_to_local[i];
                 let l = to_local * (hit.p - s.center);
-                to_local.inverse() * Vec3::new(-l.y, l.x, 0.0)
+                to_local.inverse() * Vec3A::new(-l.y, l.x, 0.0)
             }
             _ => {
                 let d = &self.disks[i];
-                let q = d.to_local.transform_point3(hit.p);
+                let q = d.to_local.transform_point3a(hit.p);
                 let r = q.x.hypot(q.y);
                 if r > 0.0 {
                     d.to_world
-                        .transform_vector3(Vec3::new(q.x / r, q.y / r, 0.0))
+                        .transform_vector3a(Vec3A::new(q.x / r, q.y / r, 0.0))
                 } else {
-                    Vec3::ZERO
+                    Vec3A::ZERO
                 }
             }
         }
@@ -76,7 +76,7 @@ impl Geometry {
     pub fn shading_frame(&self, hit: &Hit) -> Frame {
         let n = hit.ns;
         let dp = self.dp_du(hit);
-        if dp == Vec3::ZERO {
+        if dp == Vec3A::ZERO {
             return Frame::from_normal(n);
         }
         match (dp - n * n.dot(dp)).try_normalize() {

@@ -42,14 +42,14 @@ mod uv;
 pub use types::{Hit, HitRecord, PositionSample};
 
 use bvh::Bvh;
-use glam::{Mat3, Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3A};
 use pack::TriPack;
 use types::{Disk, ShapeSampling, Sphere, Tri};
 
 /// All surfaces of a scene and their acceleration structure.
 pub struct Geometry {
     tris: Vec<Tri>,
-    vertex_normals: Vec<[Vec3; 3]>,
+    vertex_normals: Vec<[Vec3A; 3]>,
     /// Texture coordinates of the triangles that have them (`Tri::uvs`).
     tri_uvs: Vec<[Vec2; 3]>,
     spheres: Vec<Sphere>,

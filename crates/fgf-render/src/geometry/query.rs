@@ -8,7 +8,7 @@ use super::pack::splat_ray;
 use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
 use crate::ray::Ray;
-use glam::{Vec3, Vec3A};
+use glam::Vec3A;
 
 impl Geometry {
     /// World bounds of all surfaces.
@@ -143,7 +143,7 @@ impl Geometry {
                 // The hit point from barycentrics is more accurate than o + t d.
                 Hit {
                     t,
-                    p: (tri.v0 + u * tri.e1 + v * tri.e2).into(),
+                    p: (tri.v0 + u * tri.e1 + v * tri.e2),
                     n: tri.n,
                     ns,
                     shape: tri.shape,
@@ -190,7 +190,7 @@ impl Geometry {
         let (mut u, mut v) = (0.0, 0.0);
         if prim >> KIND_SHIFT == KIND_TRI {
             let tri = &self.tris[(prim & INDEX_MASK) as usize];
-            let w = Vec3A::from(ray.at(t)) - tri.v0;
+            let w = ray.at(t) - tri.v0;
             let (d00, d01, d11) = (tri.e1.dot(tri.e1), tri.e1.dot(tri.e2), tri.e2.dot(tri.e2));
             let (d20, d21) = (w.dot(tri.e1), w.dot(tri.e2));
             let det = d00 * d11 - d01 * d01;
@@ -215,7 +215,7 @@ impl Geometry {
         &self,
         ray: &Ray,
         t_max: f32,
-        mut visit: impl FnMut(u32, u32, f32, Vec3) -> bool,
+        mut visit: impl FnMut(u32, u32, f32, Vec3A) -> bool,
     ) -> bool {
         let od = splat_ray(ray);
         let mut go = true;
@@ -263,8 +263,8 @@ pub(super) fn sphere_roots(s: &Sphere, ray: &Ray) -> [f32; 2] {
 /// Where the ray meets a disk (NaN if it misses).
 #[inline]
 pub(super) fn disk_root(d: &Disk, ray: &Ray) -> f32 {
-    let o = d.to_local.transform_point3(ray.o);
-    let dir = d.to_local.transform_vector3(ray.d);
+    let o = d.to_local.transform_point3a(ray.o);
+    let dir = d.to_local.transform_vector3a(ray.d);
     // Affine maps keep the ray parameter, so the local t is the world t.
     let t = -o.z / dir.z;
     let p = o + t * dir;

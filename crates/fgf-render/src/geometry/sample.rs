@@ -5,7 +5,7 @@ use super::types::{
 };
 use super::Geometry;
 use crate::math::{sample_concentric_disk, sample_uniform_sphere, sample_uniform_triangle};
-use glam::Vec3;
+use glam::Vec3A;
 
 impl Geometry {
     /// A point uniformly distributed (by area) on shape `shape`; the pdf
@@ -59,7 +59,7 @@ impl Geometry {
                 };
                 (
                     PositionSample {
-                        p: (t.v0 + b[0] * t.e1 + b[1] * t.e2).into(),
+                        p: (t.v0 + b[0] * t.e1 + b[1] * t.e2),
                         n: t.n,
                         ns,
                     },
@@ -85,7 +85,7 @@ impl Geometry {
                 let q = sample_concentric_disk(u);
                 (
                     PositionSample {
-                        p: d.to_world.transform_point3(Vec3::new(q[0], q[1], 0.0)),
+                        p: d.to_world.transform_point3a(Vec3A::new(q[0], q[1], 0.0)),
                         n: d.n,
                         ns: d.n,
                     },

@@ -54,12 +54,12 @@ fn packed_bvh_matches_brute_force() {
     for _ in 0..2000 {
         let o = r3(&mut s) * 6.0 - Vec3::ONE;
         let d = crate::math::sample_uniform_sphere(s.next_2d());
-        let ray = Ray { o, d };
+        let ray = Ray { o: o.into(), d };
         let got = g.intersect(&ray, f32::INFINITY).map(|h| h.t);
         let want = g
             .tris
             .iter()
-            .filter_map(|t| intersect_tri(t, o.into(), d.into(), f32::INFINITY).map(|r| r.0))
+            .filter_map(|t| intersect_tri(t, o.into(), d, f32::INFINITY).map(|r| r.0))
             .fold(None, |m: Option<f32>, t| Some(m.map_or(t, |m| m.min(t))));
         match (got, want) {
             (None, None) => {}
@@ -89,14 +89,17 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
     for k in 0..4000 {
         let (o, d) = if k % 2 == 0 {
             let o = r3(&mut s) * 6.0 - Vec3::ONE;
-            (o, crate::math::sample_uniform_sphere(s.next_2d()))
+            (o, crate::math::sample_uniform_sphere(s.next_2d()).into())
         } else {
             let v = vertices[(s.next_1d() * vertices.len() as f32) as usize % vertices.len()];
             let mut d = Vec3::ZERO;
             d[k / 2 % 3] = if k / 6 % 2 == 0 { 1.0 } else { -1.0 };
             (v - d * 0.5, d)
         };
-        let ray = Ray { o, d };
+        let ray = Ray {
+            o: o.into(),
+            d: d.into(),
+        };
         let t_max = if k % 3 == 0 {
             f32::INFINITY
         } else {
@@ -180,7 +183,7 @@ fn queries_match_brute_force_on_mixed_primitives() {
     for _ in 0..3000 {
         let o = r3(&mut s) * 6.0 - Vec3::ONE;
         let d = crate::math::sample_uniform_sphere(s.next_2d());
-        let ray = Ray { o, d };
+        let ray = Ray { o: o.into(), d };
         let t_max = if s.next_1d() < 0.5 {
             f32::INFINITY
         } else {
@@ -188,7 +191,7 @@ fn queries_match_brute_force_on_mixed_primitives() {
         };
         let mut want: Vec<(f32, u32)> = Vec::new();
         for t in &g.tris {
-            if let Some((th, _, _)) = intersect_tri(t, o.into(), d.into(), t_max) {
+            if let Some((th, _, _)) = intersect_tri(t, o.into(), d, t_max) {
                 want.push((th, t.shape));
             }
         }
@@ -262,14 +265,19 @@ fn cube_area_and_sampling() {
     for _ in 0..n {
         let ps = g.sample_shape(0, s.next_1d(), s.next_2d());
         // On the surface of the box, normal pointing out of the face.
-        let q = ps.p / Vec3::new(1.0, 2.0, 3.0);
+        let q = Vec3::from(ps.p) / Vec3::new(1.0, 2.0, 3.0);
         assert!((q.abs().max_element() - 1.0).abs() < 1e-5);
         let axis = (0..3)
             .max_by(|&a, &b| q[a].abs().total_cmp(&q[b].abs()))
             .unwrap();
         let mut face_n = Vec3::ZERO;
         face_n[axis] = q[axis].signum();
-        assert!((ps.n - face_n).length() < 1e-6, "{:?} at {:?}", ps.n, ps.p);
+        assert!(
+            (Vec3::from(ps.n) - face_n).length() < 1e-6,
+            "{:?} at {:?}",
+            ps.n,
+            ps.p
+        );
         if ps.n.y > 0.5 && ps.p.x > 0.0 && ps.p.z > 0.0 {
             on_top_far_corner += 1;
         }
@@ -447,7 +455,15 @@ fn texture_coordinates_match_mitsuba() {
     ];
     for (k, (g, m, o, d, want)) in cases.into_iter().enumerate() {
         let geom = Geometry::build(&[plain_shape(g, m)]).unwrap();
-        let h = geom.intersect(&Ray { o, d }, f32::INFINITY).expect("a hit");
+        let h = geom
+            .intersect(
+                &Ray {
+                    o: o.into(),
+                    d: d.into(),
+                },
+                f32::INFINITY,
+            )
+            .expect("a hit");
         let uv = geom.uv(&h);
         assert!(
             (uv.x - want[0]).abs() < 2e-5 && (uv.y - want[1]).abs() < 2e-5,
@@ -491,11 +507,11 @@ fn shading_frame_follows_dp_du() {
     for _ in 0..600 {
         let target = Vec3::new([0.0, 5.0, -5.0][(s.next_1d() * 3.0) as usize % 3], 0.0, 0.0)
             + (Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5) * 0.8;
-        let o = target + crate::math::sample_uniform_sphere(s.next_2d()) * 3.0;
+        let o = target + Vec3::from(crate::math::sample_uniform_sphere(s.next_2d())) * 3.0;
         let Some(h) = g.intersect(
             &Ray {
-                o,
-                d: (target - o).normalize(),
+                o: o.into(),
+                d: (target - o).normalize().into(),
             },
             f32::INFINITY,
         ) else {
@@ -507,15 +523,15 @@ fn shading_frame_follows_dp_du() {
         let want = match h.shape {
             0 => m3 * Vec3::X,
             1 => {
-                let l = inv * (h.p - Vec3::new(5.0, 0.0, 0.0));
+                let l = inv * (Vec3::from(h.p) - Vec3::new(5.0, 0.0, 0.0));
                 m3 * Vec3::new(-l.y, l.x, 0.0)
             }
             _ => {
-                let l = inv * (h.p - Vec3::new(-5.0, 0.0, 0.0));
+                let l = inv * (Vec3::from(h.p) - Vec3::new(-5.0, 0.0, 0.0));
                 m3 * Vec3::new(l.x, l.y, 0.0)
             }
         };
-        let want = (want - f.n * f.n.dot(want)).normalize();
+        let want = (Vec3A::from(want) - f.n * f.n.dot(want.into())).normalize();
         assert!(
             (f.s - want).length() < 1e-3,
             "shape {}: s {} vs {want}",

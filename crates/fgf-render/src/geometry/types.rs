@@ -1,17 +1,17 @@
 //! The geometry's types: hits, the primitives (triangles and
 //! parallelograms, spheres, disks) and how a shape is sampled.
 
-use glam::{Affine3A, Vec3, Vec3A};
+use glam::{Affine3A, Vec3A};
 
 /// A surface hit.
 #[derive(Debug, Clone, Copy)]
 pub struct Hit {
     pub t: f32,
-    pub p: Vec3,
+    pub p: Vec3A,
     /// Unit geometric normal, oriented as described in the module docs.
-    pub n: Vec3,
+    pub n: Vec3A,
     /// Unit shading normal (interpolated vertex normals, else `n`).
-    pub ns: Vec3,
+    pub ns: Vec3A,
     pub shape: u32,
     /// The primitive hit and its barycentrics `(u, v)` there (zero for
     /// spheres and disks), from which [`super::Geometry::uv`] computes the
@@ -36,7 +36,7 @@ pub(super) struct Tri {
     pub(super) e1: Vec3A,
     pub(super) e2: Vec3A,
     /// Oriented unit geometric normal.
-    pub(super) n: Vec3,
+    pub(super) n: Vec3A,
     pub(super) shape: u32,
     /// Index into `Geometry::vertex_normals`, or `u32::MAX` without normals.
     pub(super) normals: u32,
@@ -62,7 +62,7 @@ impl Tri {
 /// A sphere (a `sphere` shape under a similarity `to_world`).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Sphere {
-    pub(super) center: Vec3,
+    pub(super) center: Vec3A,
     pub(super) radius: f32,
     /// -1 with `flip_normals` (normals point inward), else 1.
     pub(super) sign: f32,
@@ -74,7 +74,7 @@ pub(super) struct Sphere {
 pub(super) struct Disk {
     pub(super) to_local: Affine3A,
     pub(super) to_world: Affine3A,
-    pub(super) n: Vec3,
+    pub(super) n: Vec3A,
     pub(super) shape: u32,
 }
 
@@ -93,12 +93,12 @@ pub(super) enum ShapeSampling {
 /// A point sampled on a shape.
 #[derive(Debug, Clone, Copy)]
 pub struct PositionSample {
-    pub p: Vec3,
+    pub p: Vec3A,
     /// Unit geometric normal.
-    pub n: Vec3,
+    pub n: Vec3A,
     /// Unit shading normal (interpolated vertex normals, else `n`), as
     /// [`Hit::ns`].
-    pub ns: Vec3,
+    pub ns: Vec3A,
 }
 
 // Primitive references pack the kind in the top two bits.

@@ -3,7 +3,7 @@
 
 use super::types::{Hit, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3A};
 use std::f32::consts::{FRAC_1_PI, TAU};
 
 /// `atan2(y, x)` mapped to `[0, 1)` (Mitsuba adds 2π to a negative angle).
@@ -29,11 +29,11 @@ impl Geometry {
             }
             KIND_SPHERE => {
                 let s = &self.spheres[i];
-                let d = (self.sphere_to_local[i] * (hit.p - s.center)).normalize_or(Vec3::Z);
+                let d = (self.sphere_to_local[i] * (hit.p - s.center)).normalize_or(Vec3A::Z);
                 Vec2::new(turn(d.y, d.x), d.z.clamp(-1.0, 1.0).acos() * FRAC_1_PI)
             }
             _ => {
-                let q = self.disks[i].to_local.transform_point3(hit.p);
+                let q = self.disks[i].to_local.transform_point3a(hit.p);
                 Vec2::new(q.x.hypot(q.y), turn(q.y, q.x))
             }
         }
@@ -43,7 +43,7 @@ impl Geometry {
 /// Mitsuba 3's `cube` texture coordinates on the face of outward normal
 /// `sign · e_axis`, at the local point `p` (in `[-1, 1]³`): each face maps
 /// affinely onto the unit square (checked against the `mitsuba` package).
-pub(super) fn cube_uv(axis: usize, sign: f32, p: Vec3) -> Vec2 {
+pub(super) fn cube_uv(axis: usize, sign: f32, p: Vec3A) -> Vec2 {
     let h = |x: f32| 0.5 * (x + 1.0);
     let g = |x: f32| 0.5 * (1.0 - x);
     match (axis, sign > 0.0) {

@@ -15,7 +15,7 @@ use crate::phase::Phase;
 use crate::ray::{offset_point, shadow_epsilon, Ray};
 use crate::spectrum::Spectrum;
 use crate::world::{ShapeInfo, World};
-use glam::Vec3;
+use glam::Vec3A;
 
 /// Null-boundary crossings a shadow ray keeps per query (see
 /// [`World::shadow`]).
@@ -24,9 +24,9 @@ const MAX_CROSSINGS: usize = 8;
 /// Where a shadow ray starts.
 #[derive(Debug, Clone, Copy)]
 pub(super) struct ShadowOrigin {
-    pub p: Vec3,
+    pub p: Vec3A,
     /// The geometric normal of the surface `p` lies on (`None` in a medium).
-    pub n: Option<Vec3>,
+    pub n: Option<Vec3A>,
     /// The medium the ray starts in.
     pub medium: Option<u32>,
     pub start: SegmentStart,
@@ -39,20 +39,20 @@ pub(super) trait Scatterer {
     /// times `|cos|` (RGB).
     type Value: Copy;
     /// The vertex position.
-    fn point(&self) -> Vec3;
+    fn point(&self) -> Vec3A;
     /// The scattering value toward world direction `wi` and the pdf with
     /// which the vertex itself samples `wi` (for MIS); `None` where it is
     /// zero, and then no shadow ray is traced.
-    fn toward(&self, wi: Vec3) -> Option<(Self::Value, f32)>;
+    fn toward(&self, wi: Vec3A) -> Option<(Self::Value, f32)>;
     /// Where a shadow ray toward `wi` starts.
-    fn shadow_origin(&self, wi: Vec3) -> ShadowOrigin;
+    fn shadow_origin(&self, wi: Vec3A) -> ShadowOrigin;
 }
 
 /// A scattering event in a medium; `d` is the direction the path arrived
 /// along.
 pub(super) struct MediumVertex {
-    pub p: Vec3,
-    pub d: Vec3,
+    pub p: Vec3A,
+    pub d: Vec3A,
     pub phase: Phase,
     pub medium: Option<u32>,
 }
@@ -60,17 +60,17 @@ pub(super) struct MediumVertex {
 impl Scatterer for MediumVertex {
     type Value = f32;
     #[inline]
-    fn point(&self) -> Vec3 {
+    fn point(&self) -> Vec3A {
         self.p
     }
     #[inline]
-    fn toward(&self, wi: Vec3) -> Option<(f32, f32)> {
+    fn toward(&self, wi: Vec3A) -> Option<(f32, f32)> {
         // The phase function is sampled exactly: its value is its pdf.
         let f = self.phase.eval(self.d, wi);
         Some((f, f))
     }
     #[inline]
-    fn shadow_origin(&self, _wi: Vec3) -> ShadowOrigin {
+    fn shadow_origin(&self, _wi: Vec3A) -> ShadowOrigin {
         ShadowOrigin {
             p: self.p,
             n: None,
@@ -88,23 +88,23 @@ pub(super) struct SurfaceVertex<'a> {
     pub info: &'a ShapeInfo,
     pub bsdf: &'a Bsdf,
     pub frame: &'a Frame,
-    pub wi_local: Vec3,
+    pub wi_local: Vec3A,
     pub medium: Option<u32>,
 }
 
 impl Scatterer for SurfaceVertex<'_> {
     type Value = Spectrum;
     #[inline]
-    fn point(&self) -> Vec3 {
+    fn point(&self) -> Vec3A {
         self.hit.p
     }
     #[inline(always)]
-    fn toward(&self, wi: Vec3) -> Option<(Spectrum, f32)> {
+    fn toward(&self, wi: Vec3A) -> Option<(Spectrum, f32)> {
         let (f, pdf) = self.bsdf.eval_pdf(self.wi_local, self.frame.to_local(wi));
         (f != Spectrum::ZERO).then_some((f, pdf))
     }
     #[inline]
-    fn shadow_origin(&self, wi: Vec3) -> ShadowOrigin {
+    fn shadow_origin(&self, wi: Vec3A) -> ShadowOrigin {
         let h = self.hit;
         ShadowOrigin {
             p: h.p,
@@ -119,7 +119,7 @@ impl Scatterer for SurfaceVertex<'_> {
 impl World {
     /// Pick an emitter uniformly and sample it as seen from `p`.
     #[inline]
-    pub(super) fn sample_emitter(&self, p: Vec3, s: &mut Sampler) -> Option<LightSample> {
+    pub(super) fn sample_emitter(&self, p: Vec3A, s: &mut Sampler) -> Option<LightSample> {
         if self.emitters.is_empty() {
             return None;
         }
@@ -184,7 +184,7 @@ impl World {
     pub(super) fn shadow(
         &self,
         from: &ShadowOrigin,
-        wi: Vec3,
+        wi: Vec3A,
         dist: f32,
         s: &mut Sampler,
     ) -> Spectrum {
@@ -237,7 +237,7 @@ impl World {
             // Loads from the world at their use, not hoisted before the loop
             // (and spilled) for the rare second pass (see `World::li`).
             let world = std::hint::black_box(self);
-            let mut xs = [(0.0f32, 0u32, 0u32, Vec3::ZERO); MAX_CROSSINGS];
+            let mut xs = [(0.0f32, 0u32, 0u32, Vec3A::ZERO); MAX_CROSSINGS];
             let mut len = 0usize;
             let mut more = false;
             let open = world.geom.for_each_hit(&ray, t_end, |prim, shape, t, n| {

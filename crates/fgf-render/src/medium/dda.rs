@@ -10,7 +10,7 @@
 //! a voxel wide). [`walk`] visits the cells a ray crosses inside the unit
 //! cube, in order.
 
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3A};
 use std::ops::{Add, ControlFlow, Div, Index, Mul, Neg, Sub};
 
 /// The scalar of a [`Point`]: `f32` or `f64`.
@@ -35,7 +35,7 @@ pub trait Real:
     fn to_i32(self) -> i32;
 }
 
-/// A 3D point or vector of the walk: glam's `Vec3` or `DVec3`.
+/// A 3D point or vector of the walk: glam's `Vec3A` or `DVec3`.
 pub trait Point:
     Copy
     + Add<Output = Self>
@@ -93,26 +93,37 @@ macro_rules! impl_point {
             fn recip(self) -> Self {
                 <$v>::recip(self)
             }
+            // Component by component with the scalar rules, which ignore a
+            // NaN operand (a zero direction component with the origin on a
+            // plane): glam's SIMD `Vec3A::min`/`max` would return it.
             #[inline(always)]
             fn min(self, other: Self) -> Self {
-                <$v>::min(self, other)
+                <$v>::new(
+                    Real::min(self.x, other.x),
+                    Real::min(self.y, other.y),
+                    Real::min(self.z, other.z),
+                )
             }
             #[inline(always)]
             fn max(self, other: Self) -> Self {
-                <$v>::max(self, other)
+                <$v>::new(
+                    Real::max(self.x, other.x),
+                    Real::max(self.y, other.y),
+                    Real::max(self.z, other.z),
+                )
             }
             #[inline(always)]
             fn min_element(self) -> $s {
-                <$v>::min_element(self)
+                Real::min(self.x, Real::min(self.y, self.z))
             }
             #[inline(always)]
             fn max_element(self) -> $s {
-                <$v>::max_element(self)
+                Real::max(self.x, Real::max(self.y, self.z))
             }
         }
     };
 }
-impl_point!(Vec3, f32);
+impl_point!(Vec3A, f32);
 impl_point!(DVec3, f64);
 
 /// The planes `(j + offset)/res[k]` of the module docs.
@@ -211,10 +222,10 @@ mod tests {
     use crate::math::{sample_uniform_sphere, Sampler};
 
     /// Chord length of the ray through the unit cube.
-    fn chord(o: Vec3, d: Vec3) -> f32 {
+    fn chord(o: Vec3A, d: Vec3A) -> f32 {
         let inv = d.recip();
-        let ta = (Vec3::ZERO - o) * inv;
-        let tb = (Vec3::ONE - o) * inv;
+        let ta = (Vec3A::ZERO - o) * inv;
+        let tb = (Vec3A::ONE - o) * inv;
         (ta.max(tb).min_element() - ta.min(tb).max_element().max(0.0)).max(0.0)
     }
 
@@ -225,7 +236,7 @@ mod tests {
     fn pieces_are_contiguous_and_in_their_cells() {
         let mut s = Sampler::new(4, 0, 0);
         for _ in 0..500 {
-            let o = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()) * 3.0 - Vec3::ONE;
+            let o = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 3.0 - Vec3A::ONE;
             let d = sample_uniform_sphere(s.next_2d());
             for offset in [0.0, 0.5] {
                 let lattice = Lattice {

@@ -38,7 +38,7 @@ use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{mean, Spectrum};
 use fgf_scene::{GridFilter, GridVolumeDesc, VolumeDesc, WrapMode};
-use glam::{Affine3A, Vec3};
+use glam::{Affine3A, Vec3A};
 use std::ops::ControlFlow;
 
 /// A 1- or 3-channel grid sampled in unit-cube coordinates.
@@ -65,9 +65,11 @@ impl GridTex {
         let mut to_unit = Affine3A::from_mat4(d.to_world).inverse();
         if d.use_grid_bbox {
             let b = g.bbox;
-            let lo = Vec3::new(b[0], b[1], b[2]);
-            let ext = Vec3::new(b[3], b[4], b[5]) - lo;
-            to_unit = Affine3A::from_scale(ext.recip()) * Affine3A::from_translation(-lo) * to_unit;
+            let lo = Vec3A::new(b[0], b[1], b[2]);
+            let ext = Vec3A::new(b[3], b[4], b[5]) - lo;
+            to_unit = Affine3A::from_scale(ext.recip().into())
+                * Affine3A::from_translation((-lo).into())
+                * to_unit;
         }
         Ok(GridTex {
             res: g.shape,
@@ -91,7 +93,7 @@ impl GridTex {
 
     /// Value at unit-cube coordinates `u`.
     #[inline]
-    pub fn eval_unit(&self, u: Vec3) -> Spectrum {
+    pub fn eval_unit(&self, u: Vec3A) -> Spectrum {
         match self.filter {
             GridFilter::Nearest => {
                 let [x, y, z] = self.nearest(u);
@@ -134,7 +136,7 @@ impl GridTex {
     /// Index of the voxel holding unit-cube point `u` (`nearest` filter),
     /// wrapped into the grid.
     #[inline]
-    fn nearest(&self, u: Vec3) -> [usize; 3] {
+    fn nearest(&self, u: Vec3A) -> [usize; 3] {
         std::array::from_fn(|k| self.wrap((u[k] * self.res[k] as f32).floor() as i64, k))
     }
 
@@ -142,7 +144,7 @@ impl GridTex {
     /// interpolation weight of the upper one (`trilinear` filter). Voxel
     /// centres sit at (i + 0.5)/res; indices beyond the grid are wrapped.
     #[inline]
-    fn trilinear_corners(&self, u: Vec3) -> ([usize; 3], [usize; 3], [f32; 3]) {
+    fn trilinear_corners(&self, u: Vec3A) -> ([usize; 3], [usize; 3], [f32; 3]) {
         let mut i0 = [0usize; 3];
         let mut i1 = [0usize; 3];
         let mut f = [0f32; 3];
@@ -160,7 +162,7 @@ impl GridTex {
     /// Value of a 1-channel grid at unit-cube coordinates `u` (the scalar
     /// fast path of [`Self::eval_unit`]).
     #[inline]
-    pub fn eval_unit_scalar(&self, u: Vec3) -> f32 {
+    pub fn eval_unit_scalar(&self, u: Vec3A) -> f32 {
         debug_assert_eq!(self.channels, 1);
         let d = &self.data;
         let (rx, ry) = (self.res[0], self.res[1]);
@@ -184,17 +186,17 @@ impl GridTex {
 
     /// Value at world point `p`.
     #[inline]
-    pub fn eval_world(&self, p: Vec3) -> Spectrum {
-        self.eval_unit(self.to_unit.transform_point3(p))
+    pub fn eval_world(&self, p: Vec3A) -> Spectrum {
+        self.eval_unit(self.to_unit.transform_point3a(p))
     }
 
     /// `ray` in unit-cube coordinates (the same parameter `t` as the world
     /// ray, since the map is affine).
     #[inline]
-    pub fn unit_ray(&self, ray: &Ray) -> (Vec3, Vec3) {
+    pub fn unit_ray(&self, ray: &Ray) -> (Vec3A, Vec3A) {
         (
-            self.to_unit.transform_point3(ray.o),
-            self.to_unit.transform_vector3(ray.d),
+            self.to_unit.transform_point3a(ray.o),
+            self.to_unit.transform_vector3a(ray.d),
         )
     }
 
@@ -292,7 +294,7 @@ impl GridMedium {
     }
 
     #[inline]
-    fn sigma_t_unit(&self, u: Vec3) -> Spectrum {
+    fn sigma_t_unit(&self, u: Vec3A) -> Spectrum {
         self.sigma_t.eval_unit(u) * self.scale
     }
 
@@ -306,8 +308,8 @@ impl GridMedium {
     #[inline]
     fn track<B>(
         &self,
-        o: Vec3,
-        d: Vec3,
+        o: Vec3A,
+        d: Vec3A,
         t_max: f32,
         s: &mut Sampler,
         mut f: impl FnMut(f32, f32, &mut Sampler) -> ControlFlow<B>,
@@ -492,7 +494,7 @@ mod tests {
             let d = grid_with([4, 1, 1], vec![1.0, 2.0, 3.0, 10.0], filter, wrap);
             let t = GridTex::new(&d, "t").unwrap();
             for (x, v) in xs.iter().zip(want) {
-                let got = t.eval_unit(Vec3::new(*x, 0.5, 0.5)).x;
+                let got = t.eval_unit(Vec3A::new(*x, 0.5, 0.5)).x;
                 assert!(
                     (got - v).abs() < 1e-4,
                     "{wrap:?} {filter:?} {x}: {got} vs {v}"
@@ -513,7 +515,7 @@ mod tests {
             (0.7, 0.9),
             (0.9, 1.0),
         ] {
-            let got = t.eval_unit(Vec3::new(x, 0.5, 0.5)).x;
+            let got = t.eval_unit(Vec3A::new(x, 0.5, 0.5)).x;
             assert!((got - v).abs() < 1e-5, "{x}: {got} vs {v}");
         }
     }
@@ -540,7 +542,7 @@ mod tests {
                 .unwrap();
                 for _ in 0..20_000 {
                     // Points near the faces are where the wrap modes differ.
-                    let u = Vec3::new(s.next_1d(), s.next_1d(), s.next_1d()).map(|x| {
+                    let u = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()).map(|x| {
                         if x < 0.5 {
                             x * x * 2.0
                         } else {

@@ -73,7 +73,7 @@ use crate::ray::Ray;
 use crate::spectrum::Spectrum;
 use fgf_core::transmittance::{Davis, DavisWeinstein, Exponential, Fgf, Model, Transmittance};
 use fgf_scene::{GridFilter, GridVolumeDesc, KernelDesc, MediumDesc, TransmittanceDesc};
-use glam::{DVec3, Vec3};
+use glam::{DVec3, Vec3A};
 use std::ops::ControlFlow;
 
 /// A non-exponential medium; see the module docs.
@@ -413,7 +413,7 @@ impl Density {
     fn rho(&self, o: DVec3, d: DVec3, t: f64) -> f64 {
         let p = o + d * t;
         self.tex
-            .eval_unit(Vec3::new(p.x as f32, p.y as f32, p.z as f32))
+            .eval_unit(Vec3A::new(p.x as f32, p.y as f32, p.z as f32))
             .x as f64
     }
 
