@@ -473,12 +473,21 @@ fn exact_add3(pending: &[f64; 3], v: [f64; 3], x: [f32; 3], min: f32) -> ([f64; 
 /// unit below the range); `false` if `f` leaves the range.
 #[inline]
 fn flush_one(f: &mut Fixed, p: &mut f64) -> bool {
-    let ok = match Fixed::from_f64(*p) {
+    let v = std::mem::replace(p, 0.0);
+    // Shortcuts for the common final flush of a render: nothing pending
+    // (a black pixel), or nothing in `f` yet (every sample took the fast
+    // path), where the sum is the pending value itself.
+    if v == 0.0 {
+        return true;
+    }
+    match Fixed::from_f64(v) {
+        Some(x) if *f == Fixed::default() => {
+            *f = x;
+            true
+        }
         Some(x) => f.merge(&x),
         None => false,
-    };
-    *p = 0.0;
-    ok
+    }
 }
 
 /// Add one sample's radiance `l` to a pixel's sums through f64 partial sums
