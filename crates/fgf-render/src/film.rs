@@ -509,6 +509,32 @@ pub fn accumulate_pending(
     sq: Option<(&mut [Fixed], &mut [f64; 3])>,
     l: Spectrum,
 ) -> Result<(), (usize, f64)> {
+    add_pending::<false>(sum, pending, sq, l)
+}
+
+/// [`accumulate_pending`] for a renderer's sample, where a NaN or infinite
+/// `l` (a numerical failure, e.g. a zero pdf) would poison the pixel for
+/// ever: such a sample counts as 0 (it leaves the sums as they are). The
+/// test costs nothing on the fast path, which only finite samples pass
+/// (`inf - inf` and NaN fail its exactness test).
+#[inline]
+pub fn accumulate_sample(
+    sum: &mut [Fixed],
+    pending: &mut [f64; 3],
+    sq: Option<(&mut [Fixed], &mut [f64; 3])>,
+    l: Spectrum,
+) -> Result<(), (usize, f64)> {
+    add_pending::<true>(sum, pending, sq, l)
+}
+
+/// [`accumulate_pending`], and with `DROP_NON_FINITE` [`accumulate_sample`].
+#[inline(always)]
+fn add_pending<const DROP_NON_FINITE: bool>(
+    sum: &mut [Fixed],
+    pending: &mut [f64; 3],
+    sq: Option<(&mut [Fixed], &mut [f64; 3])>,
+    l: Spectrum,
+) -> Result<(), (usize, f64)> {
     let v = l.to_array();
     let (t, fast) = exact_add3(pending, v.map(f64::from), v, ON_GRID);
     match sq {
@@ -524,10 +550,16 @@ pub fn accumulate_pending(
                 *pending_sq = q;
                 return Ok(());
             }
+            if DROP_NON_FINITE && !l.is_finite() {
+                return Ok(());
+            }
             flush_pending(sum, pending, Some((&mut *sum_sq, &mut *pending_sq)), l)?;
             accumulate(sum, Some(sum_sq), l)
         }
         None => {
+            if DROP_NON_FINITE && !l.is_finite() {
+                return Ok(());
+            }
             flush_pending(sum, pending, None, l)?;
             accumulate(sum, None, l)
         }
@@ -700,6 +732,41 @@ mod tests {
         }
         // Both verdicts were seen often.
         assert!(fast[0] > 1000 && fast[1] > 1000, "{fast:?}");
+    }
+
+    /// A renderer's NaN or infinite sample leaves the sums as a zero
+    /// sample would, with or without squares, and finite ones are added as
+    /// by `accumulate_pending`.
+    #[test]
+    fn accumulate_sample_counts_non_finite_samples_as_zero() {
+        let bad = [f32::NAN, f32::INFINITY, f32::NEG_INFINITY];
+        let vals: Vec<f32> = f32_values()
+            .into_iter()
+            .filter(|v| v.abs() < 1e12)
+            .collect();
+        let samples = spectra(&vals, 200, 4);
+        for squares in [false, true] {
+            let (mut s0, mut p0, mut q0, mut pq0) = (
+                [Fixed::default(); 3],
+                [0f64; 3],
+                [Fixed::default(); 3],
+                [0f64; 3],
+            );
+            let (mut s1, mut p1, mut q1, mut pq1) = (s0, p0, q0, pq0);
+            for (i, &l) in samples.iter().enumerate() {
+                let mut x = l;
+                x[i % 3] = bad[i % 3];
+                for (l0, l1) in [(l, l), (Spectrum::ZERO, x)] {
+                    let sq0 = squares.then_some((&mut q0[..], &mut pq0));
+                    let sq1 = squares.then_some((&mut q1[..], &mut pq1));
+                    accumulate_pending(&mut s0, &mut p0, sq0, l0).unwrap();
+                    accumulate_sample(&mut s1, &mut p1, sq1, l1).unwrap();
+                    assert_eq!(p0.map(f64::to_bits), p1.map(f64::to_bits), "{i}");
+                    assert_eq!(pq0.map(f64::to_bits), pq1.map(f64::to_bits), "{i}");
+                    assert_eq!((s0, q0), (s1, q1), "{i}");
+                }
+            }
+        }
     }
 
     /// A sum leaving the range is an error naming the sample that took it
