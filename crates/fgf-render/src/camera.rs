@@ -20,6 +20,8 @@ pub struct Camera {
     pp: [f32; 2],
     pub width: u32,
     pub height: u32,
+    /// `width` and `height` as f32, converted once rather than per ray.
+    size: [f32; 2],
     near: f32,
     far: f32,
 }
@@ -67,6 +69,7 @@ impl Camera {
             ],
             width: s.width,
             height: s.height,
+            size: [s.width as f32, s.height as f32],
             near: s.near_clip,
             far: s.far_clip,
         })
@@ -77,8 +80,8 @@ impl Camera {
     pub fn generate_ray(&self, fx: f32, fy: f32) -> (Ray, f32) {
         // Mitsuba adds the principal point offset to the film position
         // (as a fraction of the film) before the projection.
-        let nx = 2.0 * (fx + self.pp[0]) / self.width as f32 - 1.0;
-        let ny = 2.0 * (fy + self.pp[1]) / self.height as f32 - 1.0;
+        let nx = 2.0 * (fx + self.pp[0]) / self.size[0] - 1.0;
+        let ny = 2.0 * (fy + self.pp[1]) / self.size[1] - 1.0;
         // The point on the local z = 1 plane; its distance `len` from the
         // eye scales the near and far planes (given along the view axis)
         // into distances along the ray.

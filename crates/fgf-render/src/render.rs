@@ -24,7 +24,7 @@
 
 use crate::error::RenderError;
 use crate::film::{
-    accumulate_pending, flush_pending, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS,
+    accumulate_sample, flush_pending, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS,
 };
 use crate::math::Sampler;
 use crate::spectrum::Spectrum;
@@ -135,16 +135,12 @@ impl Prepared {
                                 .filter
                                 .sample_position(x as u32, y as u32, w as u32, h as u32, &mut s);
                             let (ray, t_max) = self.world.camera.generate_ray(fx, fy);
-                            let mut l = self.world.li(ray, t_max, &mut s) * weight;
-                            // A NaN or infinite sample (a numerical failure, e.g. a
-                            // zero pdf) would poison the pixel forever: drop it to 0.
-                            if !l.is_finite() {
-                                l = crate::spectrum::Spectrum::ZERO;
-                            }
+                            let l = self.world.li(ray, t_max, &mut s) * weight;
                             let q = sq
                                 .as_mut()
                                 .map(|(a, b)| (&mut a[3 * x..3 * x + 3], &mut b[x]));
-                            accumulate_pending(px, pp, q, l).map_err(|e| out_of_range(x, y, e))?;
+                            // A NaN or infinite sample counts as 0 (`accumulate_sample`).
+                            accumulate_sample(px, pp, q, l).map_err(|e| out_of_range(x, y, e))?;
                         }
                     }
                     progress.inc((w as u64) * n as u64);
