@@ -85,14 +85,27 @@ impl Geometry {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
         let od = splat_ray(ray);
-        self.bvh
-            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_max| {
-                self.leaf_hits(ray, &od, start, count, &mut t_max, |p, t, u, v| {
-                    best = Some((p, t, u, v));
-                    t
-                });
+        self.bvh.traverse_leaves(
+            ray.o,
+            ray.d,
+            t_max,
+            #[inline(always)]
+            |start, count, mut t_max| {
+                self.leaf_hits(
+                    ray,
+                    &od,
+                    start,
+                    count,
+                    &mut t_max,
+                    #[inline(always)]
+                    |p, t, u, v| {
+                        best = Some((p, t, u, v));
+                        t
+                    },
+                );
                 t_max
-            });
+            },
+        );
         best.map(|b| self.make_hit(ray, HitRecord(b)))
     }
 
@@ -105,21 +118,34 @@ impl Geometry {
     pub fn intersect2(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, Option<HitRecord>) {
         let mut best: [Option<(u32, f32, f32, f32)>; 2] = [None, None];
         let od = splat_ray(ray);
-        self.bvh
-            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t_leaf| {
-                self.leaf_hits(ray, &od, start, count, &mut t_leaf, |p, t, u, v| {
-                    // t is below the current second-nearest (t_leaf).
-                    match best[0] {
-                        Some(b) if b.1 <= t => best[1] = Some((p, t, u, v)),
-                        _ => {
-                            best[1] = best[0];
-                            best[0] = Some((p, t, u, v));
+        self.bvh.traverse_leaves(
+            ray.o,
+            ray.d,
+            t_max,
+            #[inline(always)]
+            |start, count, mut t_leaf| {
+                self.leaf_hits(
+                    ray,
+                    &od,
+                    start,
+                    count,
+                    &mut t_leaf,
+                    #[inline(always)]
+                    |p, t, u, v| {
+                        // t is below the current second-nearest (t_leaf).
+                        match best[0] {
+                            Some(b) if b.1 <= t => best[1] = Some((p, t, u, v)),
+                            _ => {
+                                best[1] = best[0];
+                                best[0] = Some((p, t, u, v));
+                            }
                         }
-                    }
-                    best[1].map_or(t_max, |b| b.1)
-                });
+                        best[1].map_or(t_max, |b| b.1)
+                    },
+                );
                 t_leaf
-            });
+            },
+        );
         (
             best[0].map(|b| self.make_hit(ray, HitRecord(b))),
             best[1].map(HitRecord),
@@ -219,26 +245,39 @@ impl Geometry {
     ) -> bool {
         let od = splat_ray(ray);
         let mut go = true;
-        self.bvh
-            .traverse_leaves(ray.o, ray.d, t_max, |start, count, mut t| {
-                go = self.leaf_hits(ray, &od, start, count, &mut t, |p, t, _, _| {
-                    let i = (p & INDEX_MASK) as usize;
-                    let (shape, n) = match p >> KIND_SHIFT {
-                        KIND_TRI => (self.tris[i].shape, self.tris[i].n),
-                        KIND_SPHERE => {
-                            let s = &self.spheres[i];
-                            (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+        self.bvh.traverse_leaves(
+            ray.o,
+            ray.d,
+            t_max,
+            #[inline(always)]
+            |start, count, mut t| {
+                go = self.leaf_hits(
+                    ray,
+                    &od,
+                    start,
+                    count,
+                    &mut t,
+                    #[inline(always)]
+                    |p, t, _, _| {
+                        let i = (p & INDEX_MASK) as usize;
+                        let (shape, n) = match p >> KIND_SHIFT {
+                            KIND_TRI => (self.tris[i].shape, self.tris[i].n),
+                            KIND_SPHERE => {
+                                let s = &self.spheres[i];
+                                (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+                            }
+                            _ => (self.disks[i].shape, self.disks[i].n),
+                        };
+                        if visit(p, shape, t, n) {
+                            t_max
+                        } else {
+                            -1.0
                         }
-                        _ => (self.disks[i].shape, self.disks[i].n),
-                    };
-                    if visit(p, shape, t, n) {
-                        t_max
-                    } else {
-                        -1.0
-                    }
-                });
+                    },
+                );
                 t
-            });
+            },
+        );
         go
     }
 }

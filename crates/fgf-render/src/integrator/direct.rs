@@ -240,32 +240,37 @@ impl World {
             let mut xs = [(0.0f32, 0u32, 0u32, Vec3A::ZERO); MAX_CROSSINGS];
             let mut len = 0usize;
             let mut more = false;
-            let open = world.geom.for_each_hit(&ray, t_end, |prim, shape, t, n| {
-                if (t, prim) <= done {
-                    return true;
-                }
-                let info = &world.shapes[shape as usize];
-                if !info.null && !info.partial {
-                    return false;
-                }
-                // Insert in (t, prim) order, keeping the nearest MAX_CROSSINGS.
-                let key = (t, prim);
-                if len == MAX_CROSSINGS {
-                    more = true;
-                    if key >= (xs[len - 1].0, xs[len - 1].1) {
+            let open = world.geom.for_each_hit(
+                &ray,
+                t_end,
+                #[inline(always)]
+                |prim, shape, t, n| {
+                    if (t, prim) <= done {
                         return true;
                     }
-                    len -= 1;
-                }
-                let mut i = len;
-                while i > 0 && key < (xs[i - 1].0, xs[i - 1].1) {
-                    xs[i] = xs[i - 1];
-                    i -= 1;
-                }
-                xs[i] = (t, prim, shape, n);
-                len += 1;
-                true
-            });
+                    let info = &world.shapes[shape as usize];
+                    if !info.null && !info.partial {
+                        return false;
+                    }
+                    // Insert in (t, prim) order, keeping the nearest MAX_CROSSINGS.
+                    let key = (t, prim);
+                    if len == MAX_CROSSINGS {
+                        more = true;
+                        if key >= (xs[len - 1].0, xs[len - 1].1) {
+                            return true;
+                        }
+                        len -= 1;
+                    }
+                    let mut i = len;
+                    while i > 0 && key < (xs[i - 1].0, xs[i - 1].1) {
+                        xs[i] = xs[i - 1];
+                        i -= 1;
+                    }
+                    xs[i] = (t, prim, shape, n);
+                    len += 1;
+                    true
+                },
+            );
             if !open {
                 return Spectrum::ZERO;
             }
