@@ -3,7 +3,6 @@
 //! triangles 8 at a time and its spheres and disks analytically.
 
 use super::bvh::{Aabb, PACK};
-use super::lanes8::F8;
 use super::pack::splat_ray;
 use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
@@ -24,7 +23,6 @@ impl Geometry {
     fn leaf_hits(
         &self,
         ray: &Ray,
-        od: &([F8; 3], [F8; 3]),
         start: u32,
         count: u32,
         t_max: &mut f32,
@@ -33,6 +31,10 @@ impl Geometry {
         // Leaves start at multiples of PACK and the lanes after a leaf's last
         // primitive are padding (see `Bvh::build`), which is in neither
         // mask of its pack and never hit: the leaf is its whole packs.
+        // The ray splatted here, not by the caller: a reference to it
+        // captured by the leaf closure would keep it (six 8-lane vectors)
+        // in memory for every query, even on the root-leaf path.
+        let od = splat_ray(ray);
         let end = start + count;
         let mut k = start;
         while k < end {
@@ -84,7 +86,6 @@ impl Geometry {
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
-        let od = splat_ray(ray);
         self.bvh.traverse_leaves(
             ray.o,
             ray.d,
@@ -93,7 +94,6 @@ impl Geometry {
             |start, count, mut t_max| {
                 self.leaf_hits(
                     ray,
-                    &od,
                     start,
                     count,
                     &mut t_max,
@@ -117,7 +117,6 @@ impl Geometry {
     #[inline(always)]
     pub fn intersect2(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, Option<HitRecord>) {
         let mut best: [Option<(u32, f32, f32, f32)>; 2] = [None, None];
-        let od = splat_ray(ray);
         self.bvh.traverse_leaves(
             ray.o,
             ray.d,
@@ -126,7 +125,6 @@ impl Geometry {
             |start, count, mut t_leaf| {
                 self.leaf_hits(
                     ray,
-                    &od,
                     start,
                     count,
                     &mut t_leaf,
@@ -243,7 +241,6 @@ impl Geometry {
         t_max: f32,
         mut visit: impl FnMut(u32, u32, f32, Vec3A) -> bool,
     ) -> bool {
-        let od = splat_ray(ray);
         let mut go = true;
         self.bvh.traverse_leaves(
             ray.o,
@@ -253,7 +250,6 @@ impl Geometry {
             |start, count, mut t| {
                 go = self.leaf_hits(
                     ray,
-                    &od,
                     start,
                     count,
                     &mut t,
