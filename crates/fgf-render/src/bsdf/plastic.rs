@@ -19,7 +19,7 @@
 use super::fresnel::{fresnel_dielectric, fresnel_diffuse_reflectance_fit};
 use super::microfacet::{reflect, Microfacet};
 use super::BsdfSample;
-use crate::math::{cosine_hemisphere_pdf, sample_cosine_hemisphere};
+use crate::math::{bin_index, cosine_hemisphere_pdf, sample_cosine_hemisphere};
 use crate::spectrum::{mean, Spectrum};
 use glam::Vec3A;
 use rayon::prelude::*;
@@ -335,7 +335,7 @@ impl RoughPlastic {
     #[inline]
     fn t(&self, mu: f32) -> f32 {
         let x = mu * (TABLE_RES - 1) as f32;
-        let i = (x as usize).min(TABLE_RES - 2);
+        let i = bin_index(x, TABLE_RES - 1);
         let w = x - i as f32;
         (1.0 - w) * self.t_ext[i] + w * self.t_ext[i + 1]
     }

@@ -14,6 +14,7 @@
 //!   marginal over rows and the conditional over columns, then a point
 //!   uniformly in it. The solid-angle pdf is `p_uv / (2π² sin θ)`.
 
+use crate::math::bin_index;
 use crate::spectrum::Spectrum;
 use fgf_scene::RgbImage;
 use glam::{Mat3, Mat4, Vec3A};
@@ -71,7 +72,7 @@ impl Guide {
     #[inline(always)]
     fn pick(&self, cdf: &[f32], u: f32) -> (usize, f32) {
         let n = cdf.len() - 1;
-        let g = ((u * n as f32) as usize).min(n - 1);
+        let g = bin_index(u * n as f32, n);
         // The bin's start is exact for `u` at its lower end; rounding of
         // `u · n` may put `u` just below it, hence the walk down as well.
         let (k0, lo, hi) = self.start[g];
@@ -183,10 +184,7 @@ impl Envmap {
 
     fn lookup(&self, u: f32, v: f32) -> Spectrum {
         let (x, y) = (u * self.w as f32, v * (self.h - 1) as f32);
-        let (ix, iy) = (
-            (x.max(0.0) as usize).min(self.w - 1),
-            (y.max(0.0) as usize).min(self.h - 2),
-        );
+        let (ix, iy) = (bin_index(x, self.w), bin_index(y, self.h - 1));
         let (fx, fy) = (x - ix as f32, y - iy as f32);
         let row = self.w + 1;
         let at = |x: usize, y: usize| self.data[y * row + x];
@@ -198,8 +196,8 @@ impl Envmap {
     #[inline]
     fn cell(&self, u: f32, v: f32) -> usize {
         let (nx, ny) = (self.w, self.h - 1);
-        let i = ((u * nx as f32) as usize).min(nx - 1);
-        let j = ((v * ny as f32).max(0.0) as usize).min(ny - 1);
+        let i = bin_index(u * nx as f32, nx);
+        let j = bin_index(v * ny as f32, ny);
         j * nx + i
     }
 

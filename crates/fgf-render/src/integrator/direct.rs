@@ -9,7 +9,7 @@
 use crate::bsdf::Bsdf;
 use crate::emitter::LightSample;
 use crate::geometry::Hit;
-use crate::math::{mis_power, Frame, Sampler};
+use crate::math::{bin_index, mis_power, Frame, Sampler};
 use crate::medium::{SegmentEnd, SegmentStart};
 use crate::phase::Phase;
 use crate::ray::{offset_point, shadow_epsilon, Ray};
@@ -124,7 +124,7 @@ impl World {
             return None;
         }
         let n_em = self.emitters.len();
-        let k = ((s.next_1d() * n_em as f32) as usize).min(n_em - 1);
+        let k = bin_index(s.next_1d() * n_em as f32, n_em);
         let u_sel = s.next_1d();
         let u = s.next_2d();
         self.emitters[k].sample(&self.geom, p, u_sel, u)

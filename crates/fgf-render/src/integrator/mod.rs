@@ -31,7 +31,7 @@ mod direct_lighting;
 
 use crate::bsdf::Bsdf;
 use crate::geometry::Hit;
-use crate::math::{mis_power, Frame, Sampler};
+use crate::math::{bin_index, mis_power, Frame, Sampler};
 use crate::medium::{DistanceEvent, SegmentStart};
 use crate::ray::{offset_point, Ray};
 use crate::spectrum::{max_comp, Spectrum};
@@ -97,7 +97,7 @@ impl World {
         // Path-level spectral MIS (see `Medium::sample_distance_spectral`):
         // free flights use the hero channel's pdf; `r_u` holds each channel's
         // path pdf over the hero's, and a contribution is `thr·L / mean(r_u)`.
-        let hero = ((s.next_1d() * 3.0) as usize).min(2);
+        let hero = bin_index(s.next_1d() * 3.0, 3);
         let mut r_u = Spectrum::ONE;
         let mut inv_mis = 1.0f32;
         // The nearest hit of `ray`, when a previous query already found it.

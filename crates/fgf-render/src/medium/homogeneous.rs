@@ -13,7 +13,7 @@
 //! per-segment mixture is kept for callers that sample a single flight.
 
 use super::{DistanceEvent, DistanceSample};
-use crate::math::Sampler;
+use crate::math::{bin_index, Sampler};
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{mean, Spectrum};
@@ -62,7 +62,7 @@ impl Homogeneous {
     }
 
     pub fn sample_distance(&self, _ray: &Ray, t_max: f32, s: &mut Sampler) -> DistanceSample {
-        let c = ((s.next_1d() * 3.0) as usize).min(2);
+        let c = bin_index(s.next_1d() * 3.0, 3);
         let sigma_c = self.sigma_t[c];
         // Inversion of the exponential CDF; 1 - u ∈ (0, 1] keeps ln finite.
         let t = if sigma_c > 0.0 {

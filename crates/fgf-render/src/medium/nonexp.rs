@@ -66,7 +66,7 @@ use super::dda::{self, Lattice};
 use super::flight_table::{exact_sample, Flight, FlightTable};
 use super::{DistanceEvent, DistanceSample, SegmentEnd, SegmentStart};
 use crate::error::RenderError;
-use crate::math::Sampler;
+use crate::math::{bin_index, Sampler};
 use crate::medium::grid::GridTex;
 use crate::phase::Phase;
 use crate::ray::Ray;
@@ -213,7 +213,7 @@ impl NonExp {
         // Same variate order as the homogeneous medium (channel, then
         // distance), so a white-noise medium reproduces `homogeneous` with
         // `σ_eff` sample for sample.
-        let c = ((s.next_1d() * 3.0) as usize).min(2);
+        let c = bin_index(s.next_1d() * 3.0, 3);
         let u = s.next_1d() as f64;
         let from_medium = self.kernel == KernelDesc::Reciprocal && start == SegmentStart::Medium;
         let (s_star, hit, s_max) = self.draw_flight(ray, t_max, c, u, from_medium);
