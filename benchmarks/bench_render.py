@@ -17,7 +17,9 @@ preceded by one untimed run of each (it fills Dr.Jit's kernel cache and the
 page cache, as for a user's second render). Reported: the median wall time,
 the median CPU seconds of the process and its threads
 (``getrusage(RUSAGE_CHILDREN)``, user + system) and the speed-up of fgf, i.e.
-Mitsuba's time over fgf's. A second, separate column keeps the old in-process
+Mitsuba's time over fgf's, and, from the last round's images, the relative
+difference of the two image means per channel (a check at the benchmark's
+spp that both render the same image). A second, separate column keeps the old in-process
 figure: ``fgf.render`` and ``mi.render`` inside an already started Python,
 64 spp, best of ``--repeats`` after a warm-up render, in M samples/s; it
 leaves out start-up and compilation and is not what a user waits for.
@@ -52,6 +54,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+from typing import Any
 
 # numpy's OpenBLAS threads spin on the same cores as the renderers; the
 # benchmark does no linear algebra.
@@ -118,7 +121,7 @@ def commands(scene: Path, out: Path, args: argparse.Namespace) -> dict[str, list
     return {"fgf": fgf, "mitsuba": mts + [str(scene)]}
 
 
-def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, float]]:
+def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     """Alternated whole-process runs; medians of wall and CPU time per renderer."""
     env = dict(os.environ, DRJIT_LIBLLVM_PATH=os.environ.get("DRJIT_LIBLLVM_PATH", LLVM19))
     runs: dict[str, list[tuple[float, float]]] = {"fgf": [], "mitsuba": []}
@@ -131,10 +134,25 @@ def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, floa
             order = ("fgf", "mitsuba") if k % 2 == 0 else ("mitsuba", "fgf")
             for name in order:
                 runs[name].append(timed(cmds[name], env))
-    return {
+        diff = mean_difference(Path(tmp) / "fgf.exr", Path(tmp) / "mitsuba.exr")
+    out = {
         name: {"wall": statistics.median(r[0] for r in rs), "cpu": statistics.median(r[1] for r in rs)}
         for name, rs in runs.items()
     }
+    out["fgf"]["mean_diff"] = diff
+    return out
+
+
+def mean_difference(fgf_exr: Path, mitsuba_exr: Path) -> list[float]:
+    """Per channel, the relative difference of the two images' means
+    (fgf / Mitsuba - 1): the renders timed are also a check, at the
+    benchmark's spp, that both converge to the same image."""
+    import mitsuba as mi
+    import numpy as np
+
+    mi.set_variant("scalar_rgb")
+    means = [np.asarray(mi.Bitmap(str(p)), dtype=np.float64)[..., :3].mean(axis=(0, 1)) for p in (fgf_exr, mitsuba_exr)]
+    return [float(a / b - 1.0) for a, b in zip(*means)]
 
 
 def self_cpu() -> float:
@@ -217,6 +235,8 @@ def compare(args: argparse.Namespace) -> None:
             if ip and who == "fgf":
                 extra += f" ({ip['fgf'] / ip['mitsuba']:.2f}x)"
             print(f"{scene.stem:<24} {label:<20} {x['wall']:8.2f} {x['cpu']:8.2f} {su}{extra}")
+        d = " ".join(f"{100 * v:+.3f}%" for v in f["mean_diff"])
+        print(f"{scene.stem:<24} {'image mean fgf/mitsuba - 1 (r g b)':<45} {d}")
 
 
 def callgrind(scene: Path, spp: int, threads: int, defines: list[str]) -> dict[str, str]:
