@@ -77,7 +77,7 @@ fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
 #[derive(Default)]
 struct Builder {
     tris: Vec<Tri>,
-    vertex_normals: Vec<[Vec3A; 3]>,
+    vertex_normals: Vec<[glam::Vec3; 3]>,
     tri_uvs: Vec<[Vec2; 3]>,
     spheres: Vec<Sphere>,
     sphere_to_local: Vec<Mat3>,
@@ -241,11 +241,7 @@ impl Builder {
             }
             let normals_idx = match (&wn, tri_idx) {
                 (Some(wn), Some(t)) if t.iter().all(|&i| (i as usize) < wn.len()) => {
-                    self.vertex_normals.push([
-                        wn[t[0] as usize],
-                        wn[t[1] as usize],
-                        wn[t[2] as usize],
-                    ]);
+                    self.vertex_normals.push(t.map(|i| wn[i as usize].into()));
                     (self.vertex_normals.len() - 1) as u32
                 }
                 _ => u32::MAX,

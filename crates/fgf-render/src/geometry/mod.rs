@@ -42,14 +42,16 @@ mod uv;
 pub use types::{Hit, HitRecord, PositionSample};
 
 use bvh::Bvh;
-use glam::{Mat3, Vec2, Vec3A};
+use glam::{Mat3, Vec2, Vec3};
 use pack::TriPack;
 use types::{Disk, ShapeSampling, Sphere, Tri};
 
 /// All surfaces of a scene and their acceleration structure.
 pub struct Geometry {
     tris: Vec<Tri>,
-    vertex_normals: Vec<[Vec3A; 3]>,
+    /// Per triangle with vertex normals, the three normals (12-byte `Vec3`s:
+    /// a mesh's largest array after the triangles, kept compact).
+    vertex_normals: Vec<[Vec3; 3]>,
     /// Texture coordinates of the triangles that have them (`Tri::uvs`).
     tri_uvs: Vec<[Vec2; 3]>,
     spheres: Vec<Sphere>,

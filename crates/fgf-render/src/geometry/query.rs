@@ -158,7 +158,7 @@ impl Geometry {
             KIND_TRI => {
                 let tri = &self.tris[i];
                 let ns = if tri.normals != u32::MAX {
-                    let vn = &self.vertex_normals[tri.normals as usize];
+                    let vn = self.vertex_normals[tri.normals as usize].map(Vec3A::from);
                     let n = (1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2];
                     n.try_normalize().unwrap_or(tri.n)
                 } else {
@@ -167,7 +167,7 @@ impl Geometry {
                 // The hit point from barycentrics is more accurate than o + t d.
                 Hit {
                     t,
-                    p: (tri.v0 + u * tri.e1 + v * tri.e2),
+                    p: tri.v0 + u * tri.e1 + v * tri.e2,
                     n: tri.n,
                     ns,
                     shape: tri.shape,

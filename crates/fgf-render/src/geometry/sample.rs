@@ -51,7 +51,7 @@ impl Geometry {
                     sample_uniform_triangle(u)
                 };
                 let ns = if t.normals != u32::MAX {
-                    let vn = &self.vertex_normals[t.normals as usize];
+                    let vn = self.vertex_normals[t.normals as usize].map(Vec3A::from);
                     let n = (1.0 - b[0] - b[1]) * vn[0] + b[0] * vn[1] + b[1] * vn[2];
                     n.try_normalize().unwrap_or(t.n)
                 } else {
@@ -59,7 +59,7 @@ impl Geometry {
                 };
                 (
                     PositionSample {
-                        p: (t.v0 + b[0] * t.e1 + b[1] * t.e2),
+                        p: t.v0 + b[0] * t.e1 + b[1] * t.e2,
                         n: t.n,
                         ns,
                     },
