@@ -13,7 +13,7 @@
 //! per-segment mixture is kept for callers that sample a single flight.
 
 use super::{DistanceEvent, DistanceSample};
-use crate::math::Sampler;
+use crate::math::{self, Sampler};
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{mean, Spectrum};
@@ -47,7 +47,7 @@ fn tr1(sigma: f32, t: f32) -> f32 {
     if sigma == 0.0 {
         1.0
     } else {
-        (-sigma * t).exp()
+        math::exp(-sigma * t)
     }
 }
 
