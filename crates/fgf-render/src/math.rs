@@ -121,8 +121,8 @@ pub fn sample_concentric_disk(u: [f32; 2]) -> [f32; 2] {
 pub fn sample_uniform_sphere(u: [f32; 2]) -> Vec3A {
     let z = 1.0 - 2.0 * u[0];
     let r = (1.0 - z * z).max(0.0).sqrt();
-    let phi = 2.0 * PI * u[1];
-    Vec3A::new(r * phi.cos(), r * phi.sin(), z)
+    let (sin_phi, cos_phi) = sin_cos_2pi(u[1]);
+    Vec3A::new(r * cos_phi, r * sin_phi, z)
 }
 
 pub const UNIFORM_SPHERE_PDF: f32 = 1.0 / (4.0 * PI);
