@@ -51,11 +51,8 @@ impl Phase {
                 };
                 let sin = (1.0 - cos * cos).max(0.0).sqrt();
                 let (sin_phi, cos_phi) = sin_cos_2pi(u[1]);
-                let wo = Frame::from_normal(d).to_world(Vec3A::new(
-                    sin * cos_phi,
-                    sin * sin_phi,
-                    cos,
-                ));
+                let wo =
+                    Frame::from_normal(d).to_world(Vec3A::new(sin * cos_phi, sin * sin_phi, cos));
                 (wo, hg(cos, g))
             }
         }
