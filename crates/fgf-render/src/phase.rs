@@ -7,7 +7,7 @@
 //! a Python example) is the table at the head of [`fgf_scene::xml::phase`];
 //! this module implements it.
 
-use crate::math::{sample_uniform_sphere, Frame, UNIFORM_SPHERE_PDF};
+use crate::math::{sample_uniform_sphere, sin_cos_2pi, Frame, UNIFORM_SPHERE_PDF};
 use fgf_scene::PhaseDesc;
 use glam::Vec3A;
 use std::f32::consts::PI;
@@ -50,12 +50,9 @@ impl Phase {
                     ((1.0 + g * g - s * s) / (2.0 * g)).clamp(-1.0, 1.0)
                 };
                 let sin = (1.0 - cos * cos).max(0.0).sqrt();
-                let phi = 2.0 * PI * u[1];
-                let wo = Frame::from_normal(d).to_world(Vec3A::new(
-                    sin * phi.cos(),
-                    sin * phi.sin(),
-                    cos,
-                ));
+                let (sin_phi, cos_phi) = sin_cos_2pi(u[1]);
+                let wo =
+                    Frame::from_normal(d).to_world(Vec3A::new(sin * cos_phi, sin * sin_phi, cos));
                 (wo, hg(cos, g))
             }
         }

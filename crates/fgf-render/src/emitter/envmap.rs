@@ -14,7 +14,7 @@
 //!   marginal over rows and the conditional over columns, then a point
 //!   uniformly in it. The solid-angle pdf is `p_uv / (2π² sin θ)`.
 
-use crate::math::bin_index;
+use crate::math::{self, bin_index};
 use crate::spectrum::Spectrum;
 use fgf_scene::RgbImage;
 use glam::{Mat3, Mat4, Vec3A};
@@ -169,8 +169,8 @@ impl Envmap {
     #[inline]
     fn grid_uv(&self, d: Vec3A) -> (f32, f32, f32) {
         let l = (self.to_local * d).normalize();
-        let u = l.x.atan2(-l.z) * (0.5 / PI) - 0.5 / self.w as f32;
-        let v = l.y.clamp(-1.0, 1.0).acos() * (1.0 / PI);
+        let u = math::atan2(l.x, -l.z) * (0.5 / PI) - 0.5 / self.w as f32;
+        let v = math::acos(l.y.clamp(-1.0, 1.0)) * (1.0 / PI);
         let sin_t = (l.x * l.x + l.z * l.z).sqrt();
         (u - u.floor(), v, sin_t)
     }
@@ -231,13 +231,12 @@ impl Envmap {
         let (i, fu) = self.col_guide[j].pick(&self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)], u[0]);
         let gu = (i as f32 + fu) / nx as f32;
         let gv = (j as f32 + fv) / ny as f32;
-        let theta = gv * PI;
-        let phi = (gu + 0.5 / self.w as f32) * 2.0 * PI;
-        let (st, ct) = theta.sin_cos();
+        // θ = π·gv and φ = 2π·(gu + ½/W), as turns.
+        let (st, ct) = math::sin_cos_2pi(0.5 * gv);
         if st <= 0.0 {
             return None;
         }
-        let (sp, cp) = phi.sin_cos();
+        let (sp, cp) = math::sin_cos_2pi(gu + 0.5 / self.w as f32);
         let local = Vec3A::new(sp * st, ct, -cp * st);
         let d = (self.to_world * local).normalize();
         let pdf = self.cell_pdf[j * nx + i] / (2.0 * PI * PI * st);

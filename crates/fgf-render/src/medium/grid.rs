@@ -33,7 +33,7 @@
 use super::dda::{self, Lattice};
 use super::{DistanceEvent, DistanceSample};
 use crate::error::RenderError;
-use crate::math::Sampler;
+use crate::math::{self, Sampler};
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{mean, Spectrum};
@@ -315,7 +315,7 @@ impl GridMedium {
         mut f: impl FnMut(f32, f32, &mut Sampler) -> ControlFlow<B>,
     ) -> ControlFlow<B> {
         // Remaining optical depth (in majorant units) to the next tentative collision.
-        let mut tau = -(1.0 - s.next_1d()).ln();
+        let mut tau = -math::ln(1.0 - s.next_1d());
         let lattice = Lattice {
             res: self.maj_res,
             offset: 0.0,
@@ -335,7 +335,7 @@ impl GridMedium {
                 }
                 t += dt;
                 f(t, mu, s)?;
-                tau = -(1.0 - s.next_1d()).ln();
+                tau = -math::ln(1.0 - s.next_1d());
             }
         })
     }

@@ -13,7 +13,7 @@
 //! per-segment mixture is kept for callers that sample a single flight.
 
 use super::{DistanceEvent, DistanceSample};
-use crate::math::{bin_index, Sampler};
+use crate::math::{self, bin_index, Sampler};
 use crate::phase::Phase;
 use crate::ray::Ray;
 use crate::spectrum::{mean, Spectrum};
@@ -47,7 +47,7 @@ fn tr1(sigma: f32, t: f32) -> f32 {
     if sigma == 0.0 {
         1.0
     } else {
-        (-sigma * t).exp()
+        math::exp(-sigma * t)
     }
 }
 
@@ -66,7 +66,7 @@ impl Homogeneous {
         let sigma_c = self.sigma_t[c];
         // Inversion of the exponential CDF; 1 - u ∈ (0, 1] keeps ln finite.
         let t = if sigma_c > 0.0 {
-            -(1.0 - s.next_1d()).ln() / sigma_c
+            -math::ln(1.0 - s.next_1d()) / sigma_c
         } else {
             f32::INFINITY
         };
@@ -102,7 +102,7 @@ impl Homogeneous {
     ) -> (DistanceSample, Spectrum) {
         let sigma_h = self.sigma_t[hero];
         let t = if sigma_h > 0.0 {
-            -(1.0 - s.next_1d()).ln() / sigma_h
+            -math::ln(1.0 - s.next_1d()) / sigma_h
         } else {
             f32::INFINITY
         };
