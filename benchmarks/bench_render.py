@@ -140,6 +140,9 @@ def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, Any]
         for name, rs in runs.items()
     }
     out["fgf"]["mean_diff"] = diff
+    # Every round's wall time, for the spread behind the medians.
+    for name, rs in runs.items():
+        out[name]["rounds"] = [r[0] for r in rs]
     return out
 
 
@@ -237,6 +240,9 @@ def compare(args: argparse.Namespace) -> None:
             print(f"{scene.stem:<24} {label:<20} {x['wall']:8.2f} {x['cpu']:8.2f} {su}{extra}")
         d = " ".join(f"{100 * v:+.3f}%" for v in f["mean_diff"])
         print(f"{scene.stem:<24} {'image mean fgf/mitsuba - 1 (r g b)':<45} {d}")
+        for who in ("fgf", "mitsuba"):
+            rounds = " ".join(f"{t:.2f}" for t in r[who]["rounds"])
+            print(f"{scene.stem:<24} {who + ' wall s by round':<45} {rounds}")
 
 
 def callgrind(scene: Path, spp: int, threads: int, defines: list[str]) -> dict[str, str]:
