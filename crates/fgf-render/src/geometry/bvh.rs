@@ -23,6 +23,7 @@
 //! with two children hit 2.6 % more.
 
 use super::lanes8::F8;
+use crate::math::bin_index;
 use glam::Vec3A;
 
 /// Axis-aligned bounding box.
@@ -497,6 +498,15 @@ fn build_rec(
     }
     // Choose the axis and bin boundary of least SAH cost.
     let extent = cb.max - cb.min;
+    let scale = Vec3A::splat(BINS as f32) / extent;
+    // The bin of primitive `p`'s centroid along `axis`: one function for
+    // the SAH sweep and the partition, which must agree.
+    let bin = |p: u32, axis: usize| {
+        bin_index(
+            (centroids[p as usize][axis] - cb.min[axis]) * scale[axis],
+            BINS,
+        )
+    };
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
@@ -504,9 +514,8 @@ fn build_rec(
         }
         let mut bin_bounds = [Aabb::EMPTY; BINS];
         let mut bin_count = [0usize; BINS];
-        let scale = BINS as f32 / extent[axis];
         for &p in &order[start..end] {
-            let b = (((centroids[p as usize][axis] - cb.min[axis]) * scale) as usize).min(BINS - 1);
+            let b = bin(p, axis);
             bin_count[b] += 1;
             bin_bounds[b] = bin_bounds[b].union(bounds[p as usize]);
         }
@@ -551,13 +560,10 @@ fn build_rec(
             {
                 return node_idx;
             }
-            let scale = BINS as f32 / extent[axis];
             let slice = &mut order[start..end];
             let mut i = 0;
             for j in 0..slice.len() {
-                let c = centroids[slice[j] as usize][axis];
-                let b = (((c - cb.min[axis]) * scale) as usize).min(BINS - 1);
-                if b < split {
+                if bin(slice[j], axis) < split {
                     slice.swap(i, j);
                     i += 1;
                 }
