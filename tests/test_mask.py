@@ -25,7 +25,7 @@ import pytest
 
 import fgf
 import test_materials as materials
-from test_render_mitsuba import K, assert_agree
+from test_render_mitsuba import Z_MEAN, assert_agree, welch
 
 SPP = 16
 
@@ -122,14 +122,15 @@ def test_mask_matches_mitsuba(tmp_path, name, integrator):
 def test_mask_depth_and_shadows_differ_between_path_and_volpath(tmp_path):
     """The comparison above can tell the integrators' treatments apart:
     Mitsuba's `path` and `volpath` images of the float-opacity scene differ
-    by many standard errors (so a renderer that treated the mask the same
-    way under both would fail one of them)."""
+    by many standard errors in at least one channel, and `assert_agree`
+    fails on any channel whose mean is off by more than Z_MEAN (3) standard
+    errors, so a renderer that treated the mask the same way under both
+    would fail one of them. (The red channel alone is the weakest, near 6
+    standard errors at these settings; blue is near 16.)"""
     a = render_mitsuba(_write(tmp_path, "float", "path"))
     b = render_mitsuba(_write(tmp_path, "float", "volpath"))
-    ma, mb = a.mean(axis=(1, 2)), b.mean(axis=(1, 2))
-    se = np.sqrt(ma.var(axis=0, ddof=1) / K + mb.var(axis=0, ddof=1) / K)
-    z = np.abs(ma.mean(axis=0) - mb.mean(axis=0)) / se
-    assert (z > 6).all(), z
+    *_, z, _ = welch(a.mean(axis=(1, 2)), b.mean(axis=(1, 2)))
+    assert np.abs(z).max() > 2 * Z_MEAN, z
 
 
 def test_mask_refusals(tmp_path):
