@@ -22,6 +22,10 @@
 //! another 4.4 %, 8-wide leaf packs 3.4 % more, and a fast path for nodes
 //! with two children hit 2.6 % more.
 
+mod beam;
+
+pub use beam::{Beam, BEAM};
+
 use super::lanes8::F8;
 use crate::math::bin_index;
 use glam::Vec3A;
@@ -156,6 +160,9 @@ pub struct Bvh {
     max: Vec3A,
     /// Most stack entries a traversal can need.
     stack_need: usize,
+    /// The box of the leaf starting at pack `k` (other packs: empty), for
+    /// the rays of a beam to test before its primitives (`beam.rs`).
+    leaf_boxes: Vec<Aabb>,
 }
 
 const BINS: usize = 12;
@@ -201,7 +208,14 @@ impl Bvh {
             min: Vec3A::INFINITY,
             max: Vec3A::NEG_INFINITY,
             stack_need: 0,
+            leaf_boxes: vec![Aabb::EMPTY; padded.len() / PACK],
         };
+        for leaf in nodes.iter().filter(|n| n.count > 0) {
+            bvh.leaf_boxes[leaf.offset as usize / PACK] = Aabb {
+                min: leaf.min,
+                max: leaf.max,
+            };
+        }
         if let Some(root) = nodes.first() {
             bvh.min = root.min;
             bvh.max = root.max;
@@ -333,7 +347,7 @@ impl Bvh {
         stack: &mut [(u32, f32)],
         o: Vec3A,
         inv_d: Vec3A,
-        mut t_max: f32,
+        t_max: f32,
         hit: &mut impl FnMut(u32, u32, f32) -> f32,
     ) -> f32 {
         let o = [F8::splat(o.x), F8::splat(o.y), F8::splat(o.z)];
@@ -344,7 +358,42 @@ impl Bvh {
         let (nx, ny, nz) = (inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0);
         let near = [3 * nx as usize, 1 + 3 * ny as usize, 2 + 3 * nz as usize];
         let far = [3 * !nx as usize, 1 + 3 * !ny as usize, 2 + 3 * !nz as usize];
-        let (zero, widen) = (F8::splat(0.0), F8::splat(1.000_000_4));
+        let zero = F8::splat(0.0);
+        self.walk_with(
+            stack,
+            t_max,
+            #[inline(always)]
+            |b, t_max| {
+                // The slab test of `slab_hit` on 8 boxes. A NaN distance (a
+                // zero direction component, the origin on a slab plane) is
+                // the first operand of `max`/`min`, which then return the
+                // second (see `F8`): that slab is ignored, a conservative
+                // hit.
+                let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
+                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
+                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
+                (tn, tf)
+            },
+            hit,
+        )
+    }
+
+    /// The traversal order and culling of the 8-wide tree, shared by the
+    /// ray ([`Self::walk`]) and the beam (`beam.rs`): `test(bounds, t_max)`
+    /// gives, per child lane, an entry distance that no ray enters the box
+    /// before and an exit distance that none leaves it after (`(tn, tf)`;
+    /// the child is visited if `tn <= tf`, widened by the rounding factor
+    /// of [`Aabb::intersect`]); `hit` is called per leaf as in
+    /// [`Self::traverse_leaves`].
+    #[inline(always)]
+    fn walk_with(
+        &self,
+        stack: &mut [(u32, f32)],
+        mut t_max: f32,
+        test: impl Fn(&[F8; 6], f32) -> (F8, F8),
+        hit: &mut impl FnMut(u32, u32, f32) -> f32,
+    ) -> f32 {
+        let widen = F8::splat(1.000_000_4);
         let mut sp = 0usize;
         let mut cur = 0u32;
         loop {
@@ -356,15 +405,7 @@ impl Bvh {
                 }
             } else {
                 let node = &self.nodes[cur as usize];
-                let b = &node.bounds;
-                // The slab test of `slab_hit` on 8 boxes. A NaN distance (a
-                // zero direction component, the origin on a slab plane) is
-                // the first operand of `max`/`min`, which then return the
-                // second (see `F8`): that slab is ignored, a conservative
-                // hit.
-                let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
-                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
-                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
+                let (tn, tf) = test(&node.bounds, t_max);
                 let mut mask = tn.le(tf.mul(widen)).bitmask();
                 if mask != 0 {
                     if mask & (mask - 1) == 0 {
@@ -457,7 +498,7 @@ fn pad_leaves(nodes: &mut [Node], order: &[u32]) -> Vec<Option<u32>> {
 
 /// The slab test of [`Aabb::intersect`] on SIMD vectors, hit or miss only.
 #[inline(always)]
-fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
+pub(super) fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
     let t0 = (min - o) * inv_d;
     let t1 = (max - o) * inv_d;
     // Plain comparisons instead of f32::max/min: those handle NaN operands,

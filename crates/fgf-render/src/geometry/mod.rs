@@ -35,7 +35,7 @@ mod pack;
 mod query;
 mod sample;
 #[cfg(test)]
-mod tests;
+pub(crate) mod tests;
 mod types;
 mod uv;
 

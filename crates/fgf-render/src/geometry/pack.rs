@@ -78,9 +78,15 @@ impl TriPack {
     }
 
     /// The 8 triangles against one ray: the mask of triangle lanes hit
-    /// with `0 < t < t_max`, and every lane's `t`, `u`, `v`.
+    /// with `0 < t < t_max` (with `TIES`, `0 < t <= t_max`), and every
+    /// lane's `t`, `u`, `v`.
     #[inline(always)]
-    pub(super) fn hits(&self, o: [F8; 3], d: [F8; 3], t_max: f32) -> (u32, F8, F8, F8) {
+    pub(super) fn hits<const TIES: bool>(
+        &self,
+        o: [F8; 3],
+        d: [F8; 3],
+        t_max: f32,
+    ) -> (u32, F8, F8, F8) {
         // Sums left to right, as `a.x * b.x + a.y * b.y + a.z * b.z`.
         let dot = |a: &[F8; 3], b: &[F8; 3]| a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]));
         let w = [
@@ -101,7 +107,11 @@ impl TriPack {
             .and(u.le(one))
             .and(u.mul(self.tri_k).add(v).le(one))
             .and(zero.lt(t))
-            .and(t.lt(F8::splat(t_max)));
+            .and(if TIES {
+                t.le(F8::splat(t_max))
+            } else {
+                t.lt(F8::splat(t_max))
+            });
         (ok.bitmask() & self.tri_mask, t, u, v)
     }
 }

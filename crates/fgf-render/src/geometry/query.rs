@@ -2,7 +2,7 @@
 //! hit of a segment, all by one BVH traversal that tests each leaf's
 //! triangles 8 at a time and its spheres and disks analytically.
 
-use super::bvh::{Aabb, PACK};
+use super::bvh::{Aabb, Beam, BEAM, PACK};
 use super::pack::splat_ray;
 use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
@@ -15,12 +15,13 @@ impl Geometry {
         self.bvh.bounds()
     }
 
-    /// Calls `f(prim, t, u, v)` for every hit with `0 < t < t_max` of the
-    /// primitives of the leaf `start..start + count` (both crossings of a
-    /// sphere), where `f` returns the new `t_max`: smaller to look only for
-    /// nearer hits, negative to stop (then this returns `false`).
+    /// Calls `f(prim, t, u, v)` for every hit with `0 < t < t_max` (with
+    /// `TIES`, `0 < t <= t_max`) of the primitives of the leaf
+    /// `start..start + count` (both crossings of a sphere), where `f`
+    /// returns the new `t_max`: smaller to look only for nearer hits,
+    /// negative to stop (then this returns `false`).
     #[inline(always)]
-    fn leaf_hits(
+    fn leaf_hits<const TIES: bool>(
         &self,
         ray: &Ray,
         start: u32,
@@ -40,14 +41,14 @@ impl Geometry {
         while k < end {
             let pack = &self.packs[(k / PACK as u32) as usize];
             if pack.tri_mask != 0 {
-                let (mut mask, t, u, v) = pack.hits(od.0, od.1, *t_max);
+                let (mut mask, t, u, v) = pack.hits::<TIES>(od.0, od.1, *t_max);
                 if mask != 0 {
                     let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
                     while mask != 0 {
                         let l = mask.trailing_zeros() as usize;
                         mask &= mask - 1;
                         // A lane may have been overtaken by an earlier one.
-                        if t[l] < *t_max {
+                        if t[l] < *t_max || (TIES && t[l] == *t_max) {
                             *t_max = f(self.prims[k as usize + l], t[l], u[l], v[l]);
                             if *t_max < 0.0 {
                                 return false;
@@ -68,7 +69,7 @@ impl Geometry {
                     [disk_root(&self.disks[i], ray), f32::NAN]
                 };
                 for t in roots {
-                    if t > 0.0 && t < *t_max {
+                    if t > 0.0 && (t < *t_max || (TIES && t == *t_max)) {
                         *t_max = f(p, t, 0.0, 0.0);
                         if *t_max < 0.0 {
                             return false;
@@ -81,7 +82,8 @@ impl Geometry {
         true
     }
 
-    /// Nearest hit with `t < t_max`, if any.
+    /// Nearest hit with `t < t_max`, if any; of several at the nearest
+    /// distance, that of the least primitive id ([`keep_nearest`]).
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
@@ -91,22 +93,74 @@ impl Geometry {
             ray.d,
             t_max,
             #[inline(always)]
-            |start, count, mut t_max| {
-                self.leaf_hits(
+            |start, count, mut limit| {
+                self.leaf_hits::<true>(
                     ray,
                     start,
                     count,
-                    &mut t_max,
+                    &mut limit,
                     #[inline(always)]
-                    |p, t, u, v| {
-                        best = Some((p, t, u, v));
-                        t
-                    },
+                    |p, t, u, v| keep_nearest(&mut best, t_max, (p, t, u, v)),
                 );
-                t_max
+                limit
             },
         );
         best.map(|b| self.make_hit(ray, HitRecord(b)))
+    }
+
+    /// The nearest hits of a bundle of up to [`BEAM`] nearly parallel
+    /// rays (`rays[j]` below `t_max[j]` into `out[j]`), as
+    /// [`Self::intersect`] finds them one by one, by one traversal for all
+    /// (`bvh/beam.rs`): every ray gets the hit its own query gives, the
+    /// tie rule of [`keep_nearest`] included. Rays that form no beam
+    /// (directions of both signs along an axis) are traced one by one.
+    pub fn intersect_beam(&self, rays: &[Ray], t_max: &[f32], out: &mut [Option<Hit>]) {
+        let n = rays.len();
+        assert!(n <= BEAM && t_max.len() == n && out.len() == n);
+        let mut inv_d = [Vec3A::ZERO; BEAM];
+        for (inv, r) in inv_d.iter_mut().zip(rays) {
+            *inv = r.d.recip();
+        }
+        let beam = if n > 1 {
+            Beam::new(rays, &inv_d[..n])
+        } else {
+            None
+        };
+        let Some(beam) = beam else {
+            for ((r, &t), o) in rays.iter().zip(t_max).zip(out.iter_mut()) {
+                *o = self.intersect(r, t);
+            }
+            return;
+        };
+        let mut limit = [0f32; BEAM];
+        limit[..n].copy_from_slice(t_max);
+        let mut best: [Option<(u32, f32, f32, f32)>; BEAM] = [None; BEAM];
+        let greatest = |limit: &[f32]| limit.iter().fold(0f32, |a, &b| a.max(b));
+        self.bvh.traverse_leaves_beam(
+            &beam,
+            greatest(&limit[..n]),
+            #[inline(always)]
+            |start, count, _| {
+                for j in 0..n {
+                    // The rays of the beam that miss the leaf's box skip it.
+                    if !self.bvh.leaf_may_hit(start, rays[j].o, inv_d[j], limit[j]) {
+                        continue;
+                    }
+                    self.leaf_hits::<true>(
+                        &rays[j],
+                        start,
+                        count,
+                        &mut limit[j],
+                        #[inline(always)]
+                        |p, t, u, v| keep_nearest(&mut best[j], t_max[j], (p, t, u, v)),
+                    );
+                }
+                greatest(&limit[..n])
+            },
+        );
+        for j in 0..n {
+            out[j] = best[j].map(|b| self.make_hit(&rays[j], HitRecord(b)));
+        }
     }
 
     /// The two nearest hits with `t < t_max`, nearer first. Used where the
@@ -123,7 +177,7 @@ impl Geometry {
             t_max,
             #[inline(always)]
             |start, count, mut t_leaf| {
-                self.leaf_hits(
+                self.leaf_hits::<false>(
                     ray,
                     start,
                     count,
@@ -235,6 +289,7 @@ impl Geometry {
     /// One traversal answers a shadow ray that crosses any number of `null`
     /// medium boundaries, where [`Self::intersect`] would be called once per
     /// crossing.
+    #[inline(always)]
     pub fn for_each_hit(
         &self,
         ray: &Ray,
@@ -248,7 +303,7 @@ impl Geometry {
             t_max,
             #[inline(always)]
             |start, count, mut t| {
-                go = self.leaf_hits(
+                go = self.leaf_hits::<false>(
                     ray,
                     start,
                     count,
@@ -276,6 +331,31 @@ impl Geometry {
         );
         go
     }
+}
+
+/// Keep the candidate hit `c` (primitive, distance, barycentrics) in
+/// `best` if it is nearer than the hit there or, at the same distance, of a
+/// smaller primitive id, and is below the query's `t_max`; returns the
+/// limit for further candidates (`t_max` while there is no hit, then the
+/// best distance, which a candidate may equal). The tie rule makes the
+/// nearest hit a function of the ray alone, whatever order the leaves are
+/// visited in: a ray of a beam (`intersect_beam`) and a ray alone find the
+/// same primitive even where two lie at exactly the same distance (a shared
+/// edge).
+#[inline(always)]
+fn keep_nearest(
+    best: &mut Option<(u32, f32, f32, f32)>,
+    t_max: f32,
+    c: (u32, f32, f32, f32),
+) -> f32 {
+    let keep = match *best {
+        None => c.1 < t_max,
+        Some(b) => c.1 < b.1 || (c.1 == b.1 && c.0 < b.0),
+    };
+    if keep {
+        *best = Some(c);
+    }
+    best.map_or(t_max, |b| b.1)
 }
 
 /// Both ray parameters where the ray's line meets the sphere (NaN if it

@@ -110,7 +110,7 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
         let mut want: Option<(f32, u32)> = None;
         let mut count = 0;
         for (i, pack) in g.packs.iter().enumerate() {
-            let (mask, t, _, _) = pack.hits(od.0, od.1, t_max);
+            let (mask, t, _, _) = pack.hits::<false>(od.0, od.1, t_max);
             for l in 0..super::bvh::PACK {
                 if mask & (1 << l) != 0 {
                     count += 1;
@@ -541,4 +541,118 @@ fn shading_frame_follows_dp_du() {
         checked[h.shape as usize] += 1;
     }
     assert!(checked.iter().all(|&c| c > 50), "{checked:?}");
+}
+
+/// A `k` × `k` grid of quads, each two triangles with shared edges, as a
+/// gently curved height field over `[0, 4]²` (y up).
+pub(crate) fn height_field(k: u32) -> Arc<TriangleMesh> {
+    let mut positions = Vec::new();
+    for i in 0..=k {
+        for j in 0..=k {
+            let (x, z) = (4.0 * i as f32 / k as f32, 4.0 * j as f32 / k as f32);
+            positions.push(Vec3::new(x, 0.3 * (1.7 * x).sin() * (1.3 * z).cos(), z));
+        }
+    }
+    let v = |i: u32, j: u32| i * (k + 1) + j;
+    let mut indices = Vec::new();
+    for i in 0..k {
+        for j in 0..k {
+            indices.push([v(i, j), v(i + 1, j), v(i + 1, j + 1)]);
+            indices.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
+        }
+    }
+    Arc::new(TriangleMesh {
+        positions,
+        normals: None,
+        texcoords: None,
+        indices,
+    })
+}
+
+/// The beam query of a bundle of nearly parallel rays (the camera rays of
+/// one pixel: directions within a small cone, origins on a near plane)
+/// gives every ray the nearest hit its own query gives: the same distance
+/// and primitive.
+/// Bundles of 1 to 8 rays, narrow and wide, with finite and infinite
+/// limits, over a triangle soup, a height field with shared edges, and the
+/// height field with every triangle twice (every hit a tie, which both
+/// queries must break toward the least primitive id, the first copy); and
+/// bundles whose directions change sign along an axis, which form no beam
+/// and are traced ray by ray.
+#[test]
+fn beam_gives_each_ray_its_own_nearest_hit() {
+    use super::bvh::{Beam, BEAM};
+    use super::types::INDEX_MASK;
+    let mut s = crate::math::Sampler::new(23, 0, 0);
+    let soup = triangle_soup(&mut s, 5000, 0.2);
+    let mut twice = (*height_field(64)).clone();
+    let n_tris = twice.indices.len() as u32;
+    twice.indices.extend_from_within(..);
+    let mesh = |m: Arc<TriangleMesh>| {
+        Geometry::build(&[plain_shape(GeometryDesc::Mesh(m), Mat4::IDENTITY)]).unwrap()
+    };
+    let scenes = [mesh(soup), mesh(height_field(96)), mesh(Arc::new(twice))];
+    let (mut beams, mut hits, mut ties) = (0, 0, 0);
+    for (gi, g) in scenes.iter().enumerate() {
+        for k in 0..3000 {
+            let n = 1 + k % BEAM;
+            let eye =
+                Vec3A::new(2.0, 3.0, -1.5) + Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
+            let target = Vec3A::new(4.0 * s.next_1d(), 0.5 * s.next_1d(), 4.0 * s.next_1d());
+            let axis = (target - eye).normalize();
+            // Pixel-sized cones (1e-3 rad), a few wide ones (0.1 rad), and
+            // every 7th bundle aimed so that x changes sign across it.
+            let spread = if k % 5 == 0 { 0.1 } else { 1e-3 };
+            let axis = if k % 7 == 3 {
+                Vec3A::new(0.0, axis.y, axis.z).normalize()
+            } else {
+                axis
+            };
+            let rays: Vec<Ray> = (0..n)
+                .map(|_| {
+                    let jitter = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5;
+                    let d = (axis + spread * jitter).normalize();
+                    Ray {
+                        o: eye + 0.01 * d,
+                        d,
+                    }
+                })
+                .collect();
+            let t_max: Vec<f32> = (0..n)
+                .map(|j| {
+                    if (k + j) % 3 == 0 {
+                        3.0 + 2.0 * s.next_1d()
+                    } else {
+                        1e4
+                    }
+                })
+                .collect();
+            let inv: Vec<Vec3A> = rays.iter().map(|r| r.d.recip()).collect();
+            let mixed = rays.iter().any(|r| r.d.x < 0.0) && rays.iter().any(|r| r.d.x > 0.0);
+            let beam = Beam::new(&rays, &inv);
+            assert!(
+                !(mixed && beam.is_some()),
+                "scene {gi}, bundle {k}: mixed signs form a beam"
+            );
+            beams += (beam.is_some() && n > 1) as u32;
+            let mut got = [None; BEAM];
+            g.intersect_beam(&rays, &t_max, &mut got[..n]);
+            for j in 0..n {
+                let want = g.intersect(&rays[j], t_max[j]).map(|h| (h.t, h.prim));
+                let got = got[j].map(|h| (h.t, h.prim));
+                assert_eq!(got, want, "scene {gi}, bundle {k}, ray {j}");
+                hits += got.is_some() as u32;
+                if let (2, Some((_, prim))) = (gi, got) {
+                    assert!(
+                        prim & INDEX_MASK < n_tris,
+                        "bundle {k}, ray {j}: the second copy"
+                    );
+                    ties += 1;
+                }
+            }
+        }
+    }
+    assert!(beams > 4000, "too few bundles formed beams: {beams}");
+    assert!(hits > 10_000, "too few hits to test anything: {hits}");
+    assert!(ties > 3000, "too few ties to test the rule: {ties}");
 }

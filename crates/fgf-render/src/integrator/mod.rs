@@ -75,10 +75,52 @@ impl World {
     }
 
     /// Radiance arriving at the camera along `ray` (one sample).
-    pub fn li(&self, mut ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
+    #[inline]
+    pub fn li(&self, ray: Ray, t_max_primary: f32, s: &mut Sampler) -> Spectrum {
         if let Some((n_e, n_b)) = self.direct_samples {
             return self.li_direct(ray, t_max_primary, n_e, n_b, s);
         }
+        self.li_path(ray, t_max_primary, Known::Unknown, s)
+    }
+
+    /// Whether [`Self::li_seen`] may be given the camera ray's nearest hit:
+    /// the path integrators need no more of the first query than that
+    /// unless some surface is a `null` boundary, whose query also asks for
+    /// the hit beyond it.
+    pub(crate) fn takes_first_hit(&self) -> bool {
+        self.direct_samples.is_none() && !self.any_null
+    }
+
+    /// [`Self::li`] with the nearest hit of `ray` below `t_max_primary`
+    /// already found (`None`: it hits nothing there), as the beam query
+    /// of the camera rays of a pixel finds it; only where
+    /// [`Self::takes_first_hit`]. The first query consumes no random
+    /// numbers, so the sample is the one `li` would give.
+    pub(crate) fn li_seen(
+        &self,
+        ray: Ray,
+        t_max_primary: f32,
+        first: Option<Hit>,
+        s: &mut Sampler,
+    ) -> Spectrum {
+        debug_assert!(self.takes_first_hit());
+        let known = match first {
+            Some(h) => Known::Hit(h),
+            None => Known::Miss,
+        };
+        self.li_path(ray, t_max_primary, known, s)
+    }
+
+    /// The path tracer behind [`Self::li`] and [`Self::li_seen`], with
+    /// what is already known of the first ray's nearest hit.
+    #[inline(never)]
+    fn li_path(
+        &self,
+        mut ray: Ray,
+        t_max_primary: f32,
+        mut known: Known<Hit>,
+        s: &mut Sampler,
+    ) -> Spectrum {
         let mut l = Spectrum::ZERO;
         let mut thr = Spectrum::ONE;
         if self.max_depth == 0 {
@@ -100,8 +142,7 @@ impl World {
         let hero = bin_index(s.next_1d() * 3.0, 3);
         let mut r_u = Spectrum::ONE;
         let mut inv_mis = 1.0f32;
-        // The nearest hit of `ray`, when a previous query already found it.
-        let mut known: Known<Hit> = Known::Unknown;
+        // `known`: the nearest hit of `ray`, when a previous query already found it.
         loop {
             // Invariant loads from the world are made here, at their use,
             // not hoisted before the loop: hoisted, they were spilled to the
