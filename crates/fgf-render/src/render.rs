@@ -47,7 +47,7 @@ pub struct RenderOptions {
     /// Also return the per-pixel variance of the pixel mean.
     pub variance: bool,
     /// Samples per pixel per pass (default: chosen so a pass holds about
-    /// 2¹⁸ samples, or 8 samples per pixel if that stays within 2²⁰; it
+    /// 2¹⁸ samples, or 16 samples per pixel if that stays within 2²⁰; it
     /// does not change the image, only how often cancellation is checked
     /// and how many camera rays of a pixel are traced as one beam).
     pub spp_per_pass: Option<u32>,

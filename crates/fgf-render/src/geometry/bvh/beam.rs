@@ -1,4 +1,4 @@
-//! Beam traversal: a bundle of up to 8 nearly parallel rays, such as the
+//! Beam traversal: a bundle of up to 16 nearly parallel rays, such as the
 //! camera rays of the samples of one pixel, walks the 8-wide tree once
 //! for all of them.
 //!
@@ -25,8 +25,10 @@ use super::{slab_hit, Bvh, F8, PACK, STACK};
 use crate::ray::Ray;
 use glam::Vec3A;
 
-/// Most rays in a beam: one per lane of [`F8`].
-pub const BEAM: usize = 8;
+/// Most rays in a beam. The node test does not depend on the number of
+/// rays; more share each node's fetch and test (16 took the depth-1 mesh
+/// render 14 % less time than 8, see `docs/benchmarks.md`).
+pub const BEAM: usize = 16;
 
 /// The interval bounds of a bundle of rays (see the module docs).
 #[derive(Debug, Clone, Copy)]
