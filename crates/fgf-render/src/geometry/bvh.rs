@@ -352,12 +352,7 @@ impl Bvh {
     ) -> f32 {
         let o = [F8::splat(o.x), F8::splat(o.y), F8::splat(o.z)];
         let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
-        // Per axis, the bounds a ray enters by (the lower ones unless the
-        // direction is negative along it) and those it leaves by. (Written
-        // out: `array::map` is not always inlined.)
-        let (nx, ny, nz) = (inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0);
-        let near = [3 * nx as usize, 1 + 3 * ny as usize, 2 + 3 * nz as usize];
-        let far = [3 * !nx as usize, 1 + 3 * !ny as usize, 2 + 3 * !nz as usize];
+        let (near, far) = slab_planes([inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0]);
         let zero = F8::splat(0.0);
         self.walk_with(
             stack,
@@ -494,6 +489,19 @@ fn pad_leaves(nodes: &mut [Node], order: &[u32]) -> Vec<Option<u32>> {
         padded.push(None);
     }
     padded
+}
+
+/// Per axis, the index in [`Node8::bounds`] of the bounds a ray enters by
+/// (the lower ones unless the direction is negative along it, `neg`) and
+/// of those it leaves by. (Written out: `array::map` is not always
+/// inlined.)
+#[inline(always)]
+fn slab_planes(neg: [bool; 3]) -> ([usize; 3], [usize; 3]) {
+    let [nx, ny, nz] = neg;
+    (
+        [3 * nx as usize, 1 + 3 * ny as usize, 2 + 3 * nz as usize],
+        [3 * !nx as usize, 1 + 3 * !ny as usize, 2 + 3 * !nz as usize],
+    )
 }
 
 /// The slab test of [`Aabb::intersect`] on SIMD vectors, hit or miss only.

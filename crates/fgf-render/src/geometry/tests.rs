@@ -23,6 +23,17 @@ fn plain_shape(geometry: GeometryDesc, to_world: Mat4) -> ShapeDesc {
     }
 }
 
+/// A mesh of `positions` and triangles `indices` without normals or
+/// texture coordinates.
+fn plain_mesh(positions: Vec<Vec3>, indices: Vec<[u32; 3]>) -> Arc<TriangleMesh> {
+    Arc::new(TriangleMesh {
+        positions,
+        normals: None,
+        texcoords: None,
+        indices,
+    })
+}
+
 /// `n` random triangles of about `size` scattered over `[0, 4]³`.
 fn triangle_soup(s: &mut crate::math::Sampler, n: u32, size: f32) -> Arc<TriangleMesh> {
     let mut r3 = || Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
@@ -35,12 +46,7 @@ fn triangle_soup(s: &mut crate::math::Sampler, n: u32, size: f32) -> Arc<Triangl
         }
         indices.push([3 * i, 3 * i + 1, 3 * i + 2]);
     }
-    Arc::new(TriangleMesh {
-        positions,
-        normals: None,
-        texcoords: None,
-        indices,
-    })
+    plain_mesh(positions, indices)
 }
 
 /// The BVH with 4-wide leaf packs finds the same nearest hit as a brute
@@ -561,19 +567,14 @@ pub(crate) fn height_field(k: u32) -> Arc<TriangleMesh> {
             indices.push([v(i, j), v(i + 1, j + 1), v(i, j + 1)]);
         }
     }
-    Arc::new(TriangleMesh {
-        positions,
-        normals: None,
-        texcoords: None,
-        indices,
-    })
+    plain_mesh(positions, indices)
 }
 
 /// The beam query of a bundle of nearly parallel rays (the camera rays of
 /// one pixel: directions within a small cone, origins on a near plane)
 /// gives every ray the nearest hit its own query gives: the same distance
 /// and primitive.
-/// Bundles of 1 to 8 rays, narrow and wide, with finite and infinite
+/// Bundles of 1 to 16 rays, narrow and wide, with finite and infinite
 /// limits, over a triangle soup, a height field with shared edges, and the
 /// height field with every triangle twice (every hit a tie, which both
 /// queries must break toward the least primitive id, the first copy); and

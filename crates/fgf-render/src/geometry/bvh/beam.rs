@@ -21,7 +21,7 @@
 //! exactly the same distance, both keep the least id, whatever order the
 //! leaves come in).
 
-use super::{slab_hit, Bvh, F8, PACK, STACK};
+use super::{slab_hit, slab_planes, Bvh, F8, PACK, STACK};
 use crate::ray::Ray;
 use glam::Vec3A;
 
@@ -133,17 +133,7 @@ impl Bvh {
         let splat3 = |v: [f32; 3]| [F8::splat(v[0]), F8::splat(v[1]), F8::splat(v[2])];
         let (o_near, o_far) = (splat3(beam.o_near), splat3(beam.o_far));
         let (lo, hi) = (splat3(beam.inv_lo), splat3(beam.inv_hi));
-        let n = beam.neg;
-        let near = [
-            3 * n[0] as usize,
-            1 + 3 * n[1] as usize,
-            2 + 3 * n[2] as usize,
-        ];
-        let far = [
-            3 * !n[0] as usize,
-            1 + 3 * !n[1] as usize,
-            2 + 3 * !n[2] as usize,
-        ];
+        let (near, far) = slab_planes(beam.neg);
         let zero = F8::splat(0.0);
         self.walk_with(
             stack,
