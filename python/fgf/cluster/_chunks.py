@@ -4,7 +4,7 @@ A chunk is a range of samples ``[s0, s1)`` of every pixel. Every chunk covers
 the whole film, so the cost of a sample per pixel is the same from one chunk
 to the next, and the time of the chunks finished predicts the time of the
 next one well. :class:`Chunker` hands out the ranges not yet rendered: the
-first ones of about one render pass (:data:`PROBE_SAMPLES` samples, before
+first ones short (:data:`PROBE_SAMPLES` samples, before
 any time is known), then ranges sized so that each takes about ``seconds``
 of rendering on its worker; near the end the rest is shared among the
 workers, so that they finish together. An explicit ``chunk_spp`` fixes the
@@ -26,7 +26,7 @@ from ._film import missing
 #: pixel, the merge; measured in docs/cluster.md) is then well under 5 %.
 CHUNK_SECONDS = 2.0
 #: Samples (pixels x samples per pixel) of the first chunks, before any
-#: chunk has been timed: about one render pass, ~0.1 s at 2.5 M samples/s.
+#: chunk has been timed: ~0.1 s at 2.5 M samples/s.
 PROBE_SAMPLES = 1 << 18
 #: Smallest chunk near the end, as a fraction of the timed chunk size.
 TAIL_FRACTION = 0.25
