@@ -74,6 +74,10 @@ pub struct World {
     /// Some shape has a `null` BSDF: paths then ask for the two nearest
     /// hits, so that crossing the boundary needs no second traversal.
     pub(crate) any_null: bool,
+    /// Some shape lets shadow rays through (`null`, or
+    /// [`ShapeInfo::partial`]): shadow rays then collect the crossings;
+    /// otherwise any hit blocks them ([`crate::geometry::Geometry::occluded`]).
+    pub(crate) any_passable: bool,
 }
 
 impl World {
@@ -139,8 +143,10 @@ impl World {
         }
         let camera = Camera::new(&desc.sensor)?;
         let any_null = shapes.iter().any(|s| s.null);
+        let any_passable = shapes.iter().any(|s| s.null || s.partial);
         Ok(World {
             any_null,
+            any_passable,
             geom,
             shapes,
             bsdfs,

@@ -331,6 +331,15 @@ impl Geometry {
         );
         go
     }
+
+    /// Whether any surface crosses the segment `o + t d`, `0 < t < t_max`:
+    /// [`Self::for_each_hit`] ended at the first crossing, without reading
+    /// the crossed primitive's record (a shadow ray in a scene where every
+    /// surface blocks).
+    #[inline(always)]
+    pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
+        !self.for_each_hit(ray, t_max, |_, _, _, _| false)
+    }
 }
 
 /// Keep the candidate hit `c` (primitive, distance, barycentrics) in

@@ -180,7 +180,10 @@ impl World {
     /// medium's transmittance to its piece of the segment. Crossings are
     /// kept [`MAX_CROSSINGS`] at a time, nearest first; a segment crossing
     /// more boundaries than that is resumed with a further query past the
-    /// last crossing handled.
+    /// last crossing handled. In a scene where every surface blocks
+    /// (none `null` or partial), the query is a plain any-hit one
+    /// ([`crate::geometry::Geometry::occluded`]), which reads no record of
+    /// the surface hit.
     pub(super) fn shadow(
         &self,
         from: &ShadowOrigin,
@@ -223,13 +226,24 @@ impl World {
             return Spectrum::ONE;
         }
         let ray = Ray { o, d };
-        let mut tr = Spectrum::ONE;
         // Transmittance of medium `m` over [t0, t1].
         let segment = |world: &World, m: u32, start, t0: f32, t1: f32, s: &mut Sampler| {
             let seg = Ray { o: ray.at(t0), d };
             let t_seg = (t1 - t0).max(0.0);
             world.media[m as usize].transmittance(&seg, t_seg, start, SegmentEnd::Surface, s)
         };
+        if !self.any_passable {
+            // Every surface blocks: one any-hit query, then the medium the
+            // whole segment lies in.
+            if self.geom.occluded(&ray, t_end) {
+                return Spectrum::ZERO;
+            }
+            return match medium {
+                Some(m) => segment(self, m, start, 0.0, t_end, s),
+                None => Spectrum::ONE,
+            };
+        }
+        let mut tr = Spectrum::ONE;
         // Distance and primitive of the last crossing handled: a resumed
         // query skips everything up to it, in (t, primitive) order.
         let mut done = (0.0f32, 0u32);
