@@ -30,6 +30,7 @@ pub mod ensemble;
 pub mod error;
 pub mod film;
 pub mod geometry;
+mod huge;
 pub mod integrator;
 pub mod math;
 pub mod medium;

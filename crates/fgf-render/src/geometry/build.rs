@@ -318,10 +318,16 @@ impl Builder {
             .iter()
             .map(|i| i.map_or(PAD, |i| self.prims[i as usize]))
             .collect();
-        let packs = prims
+        let packs: Vec<TriPack> = prims
             .chunks(super::bvh::PACK)
             .map(|chunk| TriPack::new(chunk, &self.tris))
             .collect();
+        // What queries and hits read, scattered (the BVH advises its own).
+        crate::huge::advise(&packs);
+        crate::huge::advise(&prims);
+        crate::huge::advise(&self.tris);
+        crate::huge::advise(&self.vertex_normals);
+        crate::huge::advise(&self.tri_uvs);
         Geometry {
             tris: self.tris,
             vertex_normals: self.vertex_normals,

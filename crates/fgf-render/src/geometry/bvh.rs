@@ -225,6 +225,8 @@ impl Bvh {
                 bvh.stack_need = bvh.collapse(&nodes, 0);
             }
         }
+        crate::huge::advise(&bvh.nodes);
+        crate::huge::advise(&bvh.leaf_boxes);
         (bvh, padded)
     }
 

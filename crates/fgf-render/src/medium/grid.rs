@@ -71,10 +71,12 @@ impl GridTex {
                 * Affine3A::from_translation((-lo).into())
                 * to_unit;
         }
+        let data = g.data.clone();
+        crate::huge::advise(&data);
         Ok(GridTex {
             res: g.shape,
             channels: g.channels,
-            data: g.data.clone(),
+            data,
             filter: d.filter,
             wrap: d.wrap,
             to_unit,

@@ -1,0 +1,52 @@
+//! Large read-mostly arrays of a render (BVH nodes and leaf packs, triangle
+//! records, voxel grids) backed by 2 MiB pages where the system allows it.
+//!
+//! A traversal or a grid lookup touches a few bytes at scattered places of
+//! arrays that reach tens of MiB. With 4 KiB pages each such access needs
+//! its own TLB entry, and a scene of a few MiB already has more pages than
+//! the first-level TLB holds. Linux (6.1 and later) collapses an existing,
+//! filled range into huge pages on request (`madvise(MADV_COLLAPSE)`),
+//! whatever the system-wide transparent-huge-page mode (Debian's default is
+//! `madvise`: nothing is collapsed unless asked). The advice changes no
+//! content, so results are unaffected; where it is refused (an older
+//! kernel, another system, memory too fragmented) nothing changes.
+//! Measured in `docs/benchmarks.md` ("Huge pages for the BVH").
+
+/// Ask for huge pages under the 2 MiB-aligned part of `v`'s memory (none
+/// for arrays below 2 MiB). Best effort: errors are ignored.
+pub(crate) fn advise<T>(v: &[T]) {
+    #[cfg(target_os = "linux")]
+    {
+        const HUGE: usize = 1 << 21;
+        let start = v.as_ptr() as usize;
+        let end = start + std::mem::size_of_val(v);
+        let (a, b) = (start.next_multiple_of(HUGE), end & !(HUGE - 1));
+        if b > a {
+            // SAFETY: [a, b) lies within `v`'s allocation, which outlives
+            // the call; MADV_COLLAPSE keeps the memory's contents.
+            unsafe {
+                libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_COLLAPSE);
+            }
+        }
+    }
+    #[cfg(not(target_os = "linux"))]
+    let _ = v;
+}
+
+#[cfg(test)]
+mod tests {
+    /// The advice keeps every byte, for arrays below, across and well
+    /// beyond the 2 MiB page, aligned or not.
+    #[test]
+    fn advice_keeps_contents() {
+        for len in [0usize, 1, 4096, (1 << 21) - 3, (1 << 21) + 7, 5 << 20] {
+            let v: Vec<u32> = (0..len as u32)
+                .map(|i| i.wrapping_mul(2_654_435_761))
+                .collect();
+            let w = v.clone();
+            super::advise(&v);
+            super::advise(&v[len.min(3)..]);
+            assert_eq!(v, w, "len {len}");
+        }
+    }
+}
