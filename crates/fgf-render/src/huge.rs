@@ -10,7 +10,8 @@
 //! `madvise`: nothing is collapsed unless asked). The advice changes no
 //! content, so results are unaffected; where it is refused (an older
 //! kernel, another system, memory too fragmented) nothing changes.
-//! Measured in `docs/benchmarks.md` ("Huge pages for the BVH").
+//! Measured in `docs/benchmarks.md` ("Shadow rays, huge pages, and where
+//! the mesh scene's time goes").
 
 /// Ask for huge pages under the 2 MiB-aligned part of `v`'s memory (none
 /// for arrays below 2 MiB). Best effort: errors are ignored.
