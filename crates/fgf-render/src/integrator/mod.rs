@@ -284,16 +284,18 @@ impl World {
                 start = SegmentStart::Surface;
                 continue;
             }
-            let bsdf = world.bsdf_at(bsdf, &h);
-            let bsdf = &*bsdf;
             // This interaction would be event number depth + 1: nothing it
-            // leads to can contribute unless depth + 1 < max_depth.
-            // A null-lobe sample may not count (see below), so its sample
-            // is drawn first and the test made after it.
+            // leads to can contribute unless depth + 1 < max_depth (tested
+            // before the BSDF is made concrete at the hit, which a path
+            // ending here does not need). A null-lobe sample may not count
+            // (see below), so its sample is drawn first and the test made
+            // after it.
             let null_crossings = world.thin_is_crossing && bsdf.has_null_lobe();
             if depth + 1 >= world.max_depth && !null_crossings {
                 break;
             }
+            let bsdf = world.bsdf_at(bsdf, &h);
+            let bsdf = &*bsdf;
             let frame = world.frame_at(bsdf, &h);
             let wi_local = frame.to_local(-ray.d);
             if bsdf.is_smooth() && depth + 1 < world.max_depth {
