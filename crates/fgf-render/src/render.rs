@@ -323,6 +323,24 @@ mod tests {
     /// queried alone (the reference), gives the same image bit for bit, and
     /// so does the beam render split into sample ranges that cut the beams
     /// differently (rendered apart and merged).
+    /// The scene `xml` with a `k × k` height field over `[0, 4]²` (y ≈ 0)
+    /// added, which takes the BSDF of the scene's second shape.
+    fn with_height_field(xml: &str, k: u32) -> fgf_scene::SceneDesc {
+        let mut desc = fgf_scene::load_str(xml, "test.xml", ".".as_ref(), &[]).unwrap();
+        let bsdf = desc.shapes[1].bsdf;
+        desc.shapes.push(ShapeDesc {
+            name: "height field".into(),
+            geometry: GeometryDesc::Mesh(crate::geometry::tests::height_field(k)),
+            to_world: Mat4::IDENTITY,
+            flip_normals: false,
+            bsdf,
+            emitter: None,
+            interior: None,
+            exterior: None,
+        });
+        desc
+    }
+
     #[test]
     fn camera_beams_match_single_ray_queries() {
         let xml = r#"<scene version="3.0.0">
@@ -355,18 +373,7 @@ mod tests {
                 </bsdf>
             </shape>
         </scene>"#;
-        let mut desc = fgf_scene::load_str(xml, "test.xml", ".".as_ref(), &[]).unwrap();
-        let bsdf = desc.shapes[1].bsdf;
-        desc.shapes.push(ShapeDesc {
-            name: "height field".into(),
-            geometry: GeometryDesc::Mesh(crate::geometry::tests::height_field(96)),
-            to_world: Mat4::IDENTITY,
-            flip_normals: false,
-            bsdf,
-            emitter: None,
-            interior: None,
-            exterior: None,
-        });
+        let desc = with_height_field(xml, 96);
         let with = Prepared::new(&desc).unwrap();
         assert!(with.beams, "the scene should take beams");
         let mut without = Prepared::new(&desc).unwrap();
@@ -433,18 +440,7 @@ mod tests {
                 <bsdf type="diffuse"/>
             </shape>
         </scene>"#;
-        let mut desc = fgf_scene::load_str(xml, "test.xml", ".".as_ref(), &[]).unwrap();
-        let bsdf = desc.shapes[1].bsdf;
-        desc.shapes.push(ShapeDesc {
-            name: "height field".into(),
-            geometry: GeometryDesc::Mesh(crate::geometry::tests::height_field(24)),
-            to_world: Mat4::IDENTITY,
-            flip_normals: false,
-            bsdf,
-            emitter: None,
-            interior: None,
-            exterior: None,
-        });
+        let desc = with_height_field(xml, 24);
         let fast = Prepared::new(&desc).unwrap();
         assert!(
             !fast.world.any_passable,
