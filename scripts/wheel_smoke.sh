@@ -33,4 +33,12 @@ python -m venv "$WORK/venv"
 "$WORK/venv/bin/python" -m pip install --quiet --disable-pip-version-check "$wheel"
 # Run from outside the repository so that `import fgf` cannot find python/fgf.
 (cd "$WORK" && "$WORK/venv/bin/python" "$REPO/tests/wheel_smoke.py")
+# The portable wheel and the native, profile-guided build of .venv render
+# the same images, bit for bit (tests/image_digests.py).
+python benchmarks/make_mesh_envmap.py >/dev/null
+(cd "$WORK" && "$WORK/venv/bin/python" "$REPO/tests/image_digests.py" "$REPO") >"$WORK/wheel.txt"
+python tests/image_digests.py "$REPO" >"$WORK/native.txt"
+diff "$WORK/wheel.txt" "$WORK/native.txt" >&2 \
+    || { echo "wheel_smoke: the portable wheel and the native build of .venv render different images (above)" >&2; exit 1; }
+echo "wheel_smoke: the portable wheel and the native build agree on $(wc -l <"$WORK/native.txt") digests"
 echo "wheel_smoke: $(basename "$wheel"): build $((built - start)) s, install + smoke test $(($(date +%s) - built)) s"
