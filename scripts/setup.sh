@@ -41,7 +41,8 @@ build() {
         local CARGO_TARGET_DIR="$1"
         export CARGO_TARGET_DIR
     fi
-    maturin develop --release --quiet 2>&1 | grep -v -E '^(📦|🔗|🐍|💻|📡|🛠|✏️|🔨|Installed|Finished|Compiling)' || true
+    maturin develop --release --quiet 2>&1 \
+        | grep -v -E '^(📦|🔗|🐍|🍹|💻|📡|🛠|✏️|🔨|Installed|Finished|Compiling|Requirement already satisfied|Ignoring |Looking in links)' || true
     python -c "import fgf._core" || { echo "setup: building the native module failed" >&2; exit 1; }
 }
 # Profile-guided: built once instrumented, trained on small versions of the
