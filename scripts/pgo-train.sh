@@ -5,7 +5,7 @@
 # are hot; the final build lays out and inlines the code by it. Code that
 # this run does not reach is compiled as colder, so it covers every medium,
 # BSDF family, emitter and query the renderer has, plus field synthesis and
-# the transmittance model. Takes about 15 s on 2 cores.
+# the transmittance model. Takes about 10 s on 2 cores.
 #
 #   bash scripts/pgo-train.sh OUT_DIR
 set -euo pipefail

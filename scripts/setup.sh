@@ -84,14 +84,18 @@ else
     )
     # The instrumented build has its own target folder, so that the final
     # one reuses the usual target/ (and a later plain build is incremental).
-    with_flag "-Cprofile-generate=$pgo/raw" build "$PWD/target/pgo-gen"
-    rm -rf "$pgo/raw" # profiles of build scripts; only the training's count
-    trained=$(date +%s)
-    if bash scripts/pgo-train.sh "$pgo/out" && "$profdata" merge -o "$pgo/fgf.profdata" "$pgo"/raw/*.profraw; then
-        echo "setup: trained the profile-guided build in $(($(date +%s) - trained)) s; building with the profile"
+    # Its build scripts' profiles are dropped: only the training's count. If
+    # it fails (a toolchain without the profiler runtime, say), or the
+    # training does, the plain build is made instead.
+    start=$(date +%s)
+    if with_flag "-Cprofile-generate=$pgo/raw" build "$PWD/target/pgo-gen" \
+        && rm -rf "$pgo/raw" \
+        && bash scripts/pgo-train.sh "$pgo/out" \
+        && "$profdata" merge -o "$pgo/fgf.profdata" "$pgo"/raw/*.profraw; then
+        echo "setup: instrumented build and training took $(($(date +%s) - start)) s; building with the profile"
         with_flag "-Cprofile-use=$pgo/fgf.profdata" build
     else
-        echo "setup: note: the profile-guided training failed; building without it" >&2
+        echo "setup: note: the instrumented build or its training failed; building without profile guidance" >&2
         build
     fi
 fi
