@@ -317,12 +317,6 @@ mod tests {
     use fgf_scene::{GeometryDesc, ShapeDesc};
     use glam::Mat4;
 
-    /// The beam query of a pixel's camera rays changes no path: a textured
-    /// rough-plastic height field of 18,432 triangles under an environment
-    /// and an area light, rendered with beams and with every camera ray
-    /// queried alone (the reference), gives the same image bit for bit, and
-    /// so does the beam render split into sample ranges that cut the beams
-    /// differently (rendered apart and merged).
     /// The scene `xml` with a `k × k` height field over `[0, 4]²` (y ≈ 0)
     /// added, which takes the BSDF of the scene's second shape.
     fn with_height_field(xml: &str, k: u32) -> fgf_scene::SceneDesc {
@@ -341,6 +335,12 @@ mod tests {
         desc
     }
 
+    /// The beam query of a pixel's camera rays changes no path: a textured
+    /// rough-plastic height field of 18,432 triangles under an environment
+    /// and an area light, rendered with beams and with every camera ray
+    /// queried alone (the reference), gives the same image bit for bit, and
+    /// so does the beam render split into sample ranges that cut the beams
+    /// differently (rendered apart and merged).
     #[test]
     fn camera_beams_match_single_ray_queries() {
         let xml = r#"<scene version="3.0.0">
