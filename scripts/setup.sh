@@ -69,8 +69,6 @@ elif [ -z "$profdata" ]; then
     build
 else
     pgo="$PWD/target/pgo"
-    rm -rf "$pgo"
-    mkdir -p "$pgo"
     # The flag is added to the target's rustflags of .cargo/config.toml
     # (cargo joins them), or to RUSTFLAGS if the caller set those.
     triple_var="CARGO_TARGET_$(rustc -vV | sed -n 's/^host: //p' | tr 'a-z.-' 'A-Z__')_RUSTFLAGS"
@@ -82,20 +80,41 @@ else
         fi
         "${@:2}"
     )
-    # The instrumented build has its own target folder, so that the final
-    # one reuses the usual target/ (and a later plain build is incremental).
-    # Its build scripts' profiles are dropped: only the training's count. If
-    # it fails (a toolchain without the profiler runtime, say), or the
-    # training does, the plain build is made instead.
-    start=$(date +%s)
-    if with_flag "-Cprofile-generate=$pgo/raw" build "$PWD/target/pgo-gen" \
-        && rm -rf "$pgo/raw" \
-        && bash scripts/pgo-train.sh "$pgo/out" \
-        && "$profdata" merge -o "$pgo/fgf.profdata" "$pgo"/raw/*.profraw; then
-        echo "setup: instrumented build and training took $(($(date +%s) - start)) s; building with the profile"
+    # rustc tracks the profile file: a new one rebuilds every crate. So a
+    # profile is kept while what it was trained from is unchanged (the
+    # toolchain, the flags, and the tracked and modified files of the
+    # sources, the Python package, the scenes and the training), and set-up
+    # run again (as scripts/test.sh runs it) then rebuilds nothing. Outside a
+    # git checkout there is no key, and every run trains afresh.
+    inputs="crates Cargo.toml Cargo.lock .cargo python scenes scripts/setup.sh scripts/pgo-train.sh benchmarks/make_mesh_envmap.py"
+    key=""
+    if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
+        # shellcheck disable=SC2086
+        key=$({ rustc -vV; echo "RUSTFLAGS=${RUSTFLAGS-(unset)}"; git ls-files -s -- $inputs
+            git diff HEAD -- $inputs; git ls-files -o --exclude-standard -- $inputs; } | sha256sum | cut -d' ' -f1)
+    fi
+    if [ -n "$key" ] && [ -f "$pgo/fgf.profdata" ] && [ "$(cat "$pgo/key" 2>/dev/null)" = "$key" ]; then
+        echo "setup: sources unchanged since the last training; building with its profile"
         with_flag "-Cprofile-use=$pgo/fgf.profdata" build
     else
-        echo "setup: note: the instrumented build or its training failed; building without profile guidance" >&2
-        build
+        rm -rf "$pgo"
+        mkdir -p "$pgo"
+        # The instrumented build has its own target folder, so that the final
+        # one reuses the usual target/ (and a later plain build is
+        # incremental). Its build scripts' profiles are dropped: only the
+        # training's count. If it fails (a toolchain without the profiler
+        # runtime, say), or the training does, the plain build is made.
+        start=$(date +%s)
+        if with_flag "-Cprofile-generate=$pgo/raw" build "$PWD/target/pgo-gen" \
+            && rm -rf "$pgo/raw" \
+            && bash scripts/pgo-train.sh "$pgo/out" \
+            && "$profdata" merge -o "$pgo/fgf.profdata" "$pgo"/raw/*.profraw; then
+            echo "setup: instrumented build and training took $(($(date +%s) - start)) s; building with the profile"
+            with_flag "-Cprofile-use=$pgo/fgf.profdata" build
+            [ -z "$key" ] || echo "$key" >"$pgo/key"
+        else
+            echo "setup: note: the instrumented build or its training failed; building without profile guidance" >&2
+            build
+        fi
     fi
 fi
