@@ -88,7 +88,7 @@ impl Geometry {
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
-        self.bvh.traverse_leaves(
+        self.bvh.traverse_leaves::<true>(
             ray.o,
             ray.d,
             t_max,
@@ -171,7 +171,7 @@ impl Geometry {
     #[inline(always)]
     pub fn intersect2(&self, ray: &Ray, t_max: f32) -> (Option<Hit>, Option<HitRecord>) {
         let mut best: [Option<(u32, f32, f32, f32)>; 2] = [None, None];
-        self.bvh.traverse_leaves(
+        self.bvh.traverse_leaves::<true>(
             ray.o,
             ray.d,
             t_max,
@@ -297,7 +297,7 @@ impl Geometry {
         mut visit: impl FnMut(u32, u32, f32, Vec3A) -> bool,
     ) -> bool {
         let mut go = true;
-        self.bvh.traverse_leaves(
+        self.bvh.traverse_leaves::<false>(
             ray.o,
             ray.d,
             t_max,

@@ -135,7 +135,7 @@ impl Bvh {
         let (lo, hi) = (splat3(beam.inv_lo), splat3(beam.inv_hi));
         let (near, far) = slab_planes(beam.neg);
         let zero = F8::splat(0.0);
-        self.walk_with(
+        self.walk_with::<true>(
             stack,
             t_max,
             #[inline(always)]
