@@ -42,6 +42,12 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
+    // The path as an XML attribute value.
+    let mesh = mesh
+        .replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+        .replace('"', "&quot;");
     let xml = format!(
         r#"<scene version="3.0.0"><shape type="ply"><string name="filename" value="{mesh}"/></shape></scene>"#
     );
