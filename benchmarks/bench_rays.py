@@ -46,8 +46,9 @@ from pathlib import Path
 import numpy as np
 
 ROOT = Path(__file__).resolve().parents[1]
-LLVM19 = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
-SUN_THETA, SUN_PHI = np.radians(50.0), np.radians(120.0)  # as in make_mesh_envmap.sky
+sys.path.insert(0, str(ROOT / "benchmarks"))
+import make_mesh_envmap as mme  # noqa: E402
+from bench_render import LLVM19  # noqa: E402
 
 MITSUBA = r"""
 import json, sys, time
@@ -91,8 +92,7 @@ def make_rays(p: np.ndarray, tris: np.ndarray, n: int, seed: int = 5) -> dict[st
     d = rng.normal(size=(n, 3))
     d /= np.linalg.norm(d, axis=1, keepdims=True)
     d *= np.sign((d * normal).sum(1, keepdims=True)) * side
-    sun = np.array([np.sin(SUN_THETA) * np.cos(SUN_PHI), np.cos(SUN_THETA),
-                    np.sin(SUN_THETA) * np.sin(SUN_PHI)])
+    sun = mme.sun_direction()
     outward = np.sign((normal * sun).sum(1, keepdims=True))
     outward[outward == 0] = 1.0
     return {
@@ -121,9 +121,6 @@ def main() -> int:
     args = ap.parse_args()
     if not 1 <= args.rays <= 1 << 26 or args.passes < 1 or args.repeats < 1:
         ap.error("--rays: 1 to 2^26; --passes, --repeats: at least 1")
-    sys.path.insert(0, str(ROOT / "benchmarks"))
-    import make_mesh_envmap as mme
-
     quads = tuple(args.quads) if args.quads else (mme.N_U, mme.N_V)
     if min(quads) < 3 or quads[0] * quads[1] > 10_000_000:
         ap.error("--quads: each at least 3, at most 10,000,000 quads in all")
@@ -165,9 +162,10 @@ def main() -> int:
                   + " ".join(f"{x:.2f}" for x in speed["fgf"]) + f"), Mitsuba {m:.2f} (rounds "
                   + " ".join(f"{x:.2f}" for x in speed["mitsuba"]) + f"): fgf at {f / m:.2f}x")
             for tool, res in answers.items():
-                mean_t = res["sum_t"] / res["hits"] if res["hits"] and query == "nearest" else float("nan")
-                print(f"    {tool}: {res['hits']} of {res['rays']} rays hit"
-                      + (f", mean distance {mean_t:.6f}" if query == "nearest" else ""))
+                line = f"    {tool}: {res['hits']} of {res['rays']} rays hit"
+                if query == "nearest" and res["hits"]:
+                    line += f", mean distance {res['sum_t'] / res['hits']:.6f}"
+                print(line)
     return 0
 
 

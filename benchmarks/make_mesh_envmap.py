@@ -89,6 +89,15 @@ def write_ply(path: Path, p: np.ndarray, n: np.ndarray, uv: np.ndarray, tris: np
         f.write(faces.tobytes())
 
 
+SUN_THETA, SUN_PHI = np.radians(50.0), np.radians(120.0)  # from +y; azimuth from +x toward +z
+
+
+def sun_direction() -> np.ndarray:
+    """Unit direction toward the centre of the sky's sun (40° above the horizon)."""
+    return np.array([np.sin(SUN_THETA) * np.cos(SUN_PHI), np.cos(SUN_THETA),
+                     np.sin(SUN_THETA) * np.sin(SUN_PHI)])
+
+
 def sky() -> np.ndarray:
     """The environment image, (ENV_H, ENV_W, 3) float32; row 0 is straight up."""
     theta = (np.arange(ENV_H) + 0.5) / ENV_H * np.pi  # from +y
@@ -98,11 +107,9 @@ def sky() -> np.ndarray:
     t = np.clip(up, 0.0, 1.0)[..., None]
     zenith, horizon = np.array([0.25, 0.45, 1.0]), np.array([1.0, 1.0, 1.0])
     img = np.where(up[..., None] > 0, (1 - t) * horizon + t * zenith, np.array([0.3, 0.25, 0.2]))
-    # Sun: 40° above the horizon, a Gaussian spot of ~3° radius.
-    s_th, s_ph = np.radians(50.0), np.radians(120.0)
+    # Sun: a Gaussian spot of ~3° radius.
     d = np.stack([np.sin(th) * np.cos(ph), np.cos(th), np.sin(th) * np.sin(ph)], -1)
-    s = np.array([np.sin(s_th) * np.cos(s_ph), np.cos(s_th), np.sin(s_th) * np.sin(s_ph)])
-    ang = np.arccos(np.clip(d @ s, -1.0, 1.0))
+    ang = np.arccos(np.clip(d @ sun_direction(), -1.0, 1.0))
     img = img + (200.0 * np.exp(-((ang / np.radians(3.0)) ** 2)))[..., None] * np.array([1.0, 0.9, 0.7])
     return np.asarray(img, dtype=np.float32)
 

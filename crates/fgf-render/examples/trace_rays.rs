@@ -42,16 +42,11 @@ fn main() -> ExitCode {
             return ExitCode::from(2);
         }
     };
-    // The path as an XML attribute value.
-    let mesh = mesh
-        .replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
-        .replace('"', "&quot;");
-    let xml = format!(
-        r#"<scene version="3.0.0"><shape type="ply"><string name="filename" value="{mesh}"/></shape></scene>"#
-    );
-    let geom = match fgf_scene::load_str(&xml, "trace_rays.xml", ".".as_ref(), &[])
+    // The path comes in as a define, substituted after the XML is parsed,
+    // so that no character of it needs escaping.
+    let xml = r#"<scene version="3.0.0"><shape type="ply"><string name="filename" value="$mesh"/></shape></scene>"#;
+    let defines = [("mesh".to_string(), mesh.clone())];
+    let geom = match fgf_scene::load_str(xml, "trace_rays.xml", ".".as_ref(), &defines)
         .map_err(|e| e.to_string())
         .and_then(|d| Geometry::build(&d.shapes).map_err(|e| e.to_string()))
     {
