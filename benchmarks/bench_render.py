@@ -2,6 +2,7 @@
 
     python benchmarks/bench_render.py [--spp 1024] [--repeats 3] [--res 256] [--max-depth 64]
                                       [--threads N] [--scene NAME]... [--no-warmup] [--no-inprocess]
+                                      [--variant scalar_rgb]
     python benchmarks/bench_render.py --scaling [--res 128] [--spp 64] [--repeats 3]
 
 Default mode: whole processes, the way a user renders a scene file:
@@ -23,6 +24,12 @@ spp that both render the same image). A second, separate column keeps the old in
 figure: ``fgf.render`` and ``mi.render`` inside an already started Python,
 64 spp, best of ``--repeats`` after a warm-up render, in M samples/s; it
 leaves out start-up and compilation and is not what a user waits for.
+
+``--variant``: the Mitsuba variant of the whole-process runs (default
+``llvm_ad_rgb``, the one the goals are stated against). ``scalar_rgb`` traces
+one path at a time, as fgf does, so the two set side by side separate what
+Mitsuba gains from its wide vectors from what it gains elsewhere; with it,
+give ``--no-inprocess`` (the in-process column is Mitsuba's llvm variant only).
 
 ``--scaling``: (1) thread scaling, ``fgf.render`` in-process with 1 and 2
 threads (best of ``--repeats``, wall and CPU time), and (2) linearity of the
@@ -111,7 +118,7 @@ def timed(cmd: list[str], env: dict[str, str]) -> tuple[float, float]:
 def commands(scene: Path, out: Path, args: argparse.Namespace) -> dict[str, list[str]]:
     defines = [f"spp={args.spp}", f"res={args.res}", f"max_depth={args.max_depth}"]
     fgf = [executable("fgf"), "render", str(scene), "-o", str(out / "fgf.exr"), "--quiet"]
-    mts = [executable("mitsuba"), "-m", "llvm_ad_rgb", "-o", str(out / "mitsuba.exr")]
+    mts = [executable("mitsuba"), "-m", args.variant, "-o", str(out / "mitsuba.exr")]
     for d in defines:
         fgf += ["-D", d]
         mts += ["-D", d]
@@ -222,7 +229,7 @@ def compare(args: argparse.Namespace) -> None:
           f"{args.threads or 'default'}; whole processes, alternated, median of {args.repeats}"
           f"{' after a warm-up run each' if args.warmup else ''}; cores {os.cpu_count()}, "
           f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
-    print("# speed-up = Mitsuba llvm_ad_rgb time / fgf time (> 1: fgf is faster)")
+    print(f"# speed-up = Mitsuba {args.variant} time / fgf time (> 1: fgf is faster)")
     cols = f"{'wall s':>8} {'CPU s':>8} {'speed-up wall':>13} {'speed-up CPU':>12}"
     side = f" | in-process {INPROCESS_SPP} spp, M samples/s" if args.inprocess else ""
     print(f"{'scene':<24} {'renderer':<20} {cols}{side}")
@@ -231,7 +238,7 @@ def compare(args: argparse.Namespace) -> None:
         r = processes(scene, args)
         ip = inprocess(scene, args) if args.inprocess else {}
         f, m = r["fgf"], r["mitsuba"]
-        for who, label in (("fgf", "fgf"), ("mitsuba", "mitsuba llvm_ad_rgb")):
+        for who, label in (("fgf", "fgf"), ("mitsuba", f"mitsuba {args.variant}")):
             x = r[who]
             su = f"{m['wall'] / f['wall']:12.2f}x {m['cpu'] / f['cpu']:11.2f}x" if who == "fgf" else f"{'':>13} {'':>12}"
             extra = f" | {ip[who]:8.3f}" if ip else ""
@@ -302,12 +309,16 @@ def main() -> int:
     ap.add_argument("--no-inprocess", dest="inprocess", action="store_false",
                     help=f"leave out the in-process {INPROCESS_SPP}-spp column")
     ap.add_argument("--scaling", action="store_true", help="thread scaling and cost linearity instead")
+    ap.add_argument("--variant", default="llvm_ad_rgb", choices=["llvm_ad_rgb", "scalar_rgb"],
+                    help="Mitsuba variant of the whole-process runs (default llvm_ad_rgb)")
     args = ap.parse_args()
     args.scene = args.scene or SCENES
     args.res = args.res or (128 if args.scaling else 256)
     args.spp = args.spp or (64 if args.scaling else 1024)
     if min(args.res, args.spp, args.repeats) < 1 or args.max_depth < -1 or (args.threads or 1) < 1:
         ap.error("--res, --spp, --repeats and --threads must be >= 1, --max-depth >= -1")
+    if args.variant != "llvm_ad_rgb" and args.inprocess and not args.scaling:
+        ap.error("--variant other than llvm_ad_rgb needs --no-inprocess (the in-process column is llvm only)")
     if not args.scaling and not Path(LLVM19).exists() and "DRJIT_LIBLLVM_PATH" not in os.environ:
         ap.error(f"{LLVM19} is missing: Mitsuba's llvm_ad_rgb needs it (apt-get install -y libllvm19)")
     if args.scaling:
