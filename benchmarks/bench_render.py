@@ -317,9 +317,10 @@ def main() -> int:
     args.spp = args.spp or (64 if args.scaling else 1024)
     if min(args.res, args.spp, args.repeats) < 1 or args.max_depth < -1 or (args.threads or 1) < 1:
         ap.error("--res, --spp, --repeats and --threads must be >= 1, --max-depth >= -1")
-    if args.variant != "llvm_ad_rgb" and args.inprocess and not args.scaling:
-        ap.error("--variant other than llvm_ad_rgb needs --no-inprocess (the in-process column is llvm only)")
-    if not args.scaling and not Path(LLVM19).exists() and "DRJIT_LIBLLVM_PATH" not in os.environ:
+    if args.variant != "llvm_ad_rgb" and (args.scaling or args.inprocess):
+        ap.error("--variant other than llvm_ad_rgb needs --no-inprocess and no --scaling "
+                 "(the in-process column is llvm only; --scaling runs no Mitsuba)")
+    if not args.scaling and args.variant == "llvm_ad_rgb" and not Path(LLVM19).exists() and "DRJIT_LIBLLVM_PATH" not in os.environ:
         ap.error(f"{LLVM19} is missing: Mitsuba's llvm_ad_rgb needs it (apt-get install -y libllvm19)")
     if args.scaling:
         scaling(args)
