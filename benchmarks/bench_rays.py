@@ -48,7 +48,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 import make_mesh_envmap as mme  # noqa: E402
-from bench_render import LLVM19  # noqa: E402
+from bench_render import LLVM19, cpu_description  # noqa: E402
 
 MITSUBA = r"""
 import json, sys, time
@@ -139,6 +139,7 @@ def main() -> int:
         ply = Path(tmp) / "torus.ply"
         mme.write_ply(ply, p, n, uv, tris)
         sets = make_rays(p, tris, args.rays)
+        print(f"# cpu: {cpu_description()}")
         print(f"mesh: {len(tris)} triangles; {args.rays} rays per set; one thread; "
               f"{args.passes} passes per process, median; {args.repeats} rounds")
         for name, rays in sets.items():

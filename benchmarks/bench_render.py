@@ -53,6 +53,7 @@ from __future__ import annotations
 import argparse
 import json
 import os
+import platform
 import resource
 import shutil
 import statistics
@@ -95,6 +96,32 @@ def executable(name: str) -> str:
     if found is None:
         sys.exit(f"bench_render: error: no `{name}` command (install the package that provides it)")
     return found
+
+
+def cpu_description() -> str:
+    """The CPU the figures were taken on: its name, family and model, and the
+    widest vectors it has. The speed-up against Mitsuba's LLVM backend
+    depends on that width (it runs as many paths per instruction as a vector
+    holds), so a figure is only comparable with others from the same kind
+    of CPU (docs/benchmarks.md)."""
+    fields: dict[str, str] = {}
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            for line in f:
+                key, sep, value = line.partition(":")
+                if not sep:
+                    break  # the end of the first processor's block
+                fields.setdefault(key.strip(), value.strip())
+    except OSError:
+        pass
+    name = fields.get("model name") or platform.processor() or platform.machine()
+    if "cpu family" in fields and "model" in fields:
+        name += f" (family {fields['cpu family']}, model {fields['model']})"
+    flags = set((fields.get("flags") or fields.get("Features") or "").split())
+    widest = next((label for flag, label in [("avx512f", "AVX-512"), ("avx2", "AVX2"),
+                                             ("sse4_2", "SSE4.2"), ("asimd", "NEON")]
+                   if flag in flags), "vector width unknown")
+    return f"{name}, {widest}"
 
 
 def children_cpu() -> float:
@@ -229,6 +256,7 @@ def compare(args: argparse.Namespace) -> None:
           f"{args.threads or 'default'}; whole processes, alternated, median of {args.repeats}"
           f"{' after a warm-up run each' if args.warmup else ''}; cores {os.cpu_count()}, "
           f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    print(f"# cpu: {cpu_description()}")
     print(f"# speed-up = Mitsuba {args.variant} time / fgf time (> 1: fgf is faster)")
     cols = f"{'wall s':>8} {'CPU s':>8} {'speed-up wall':>13} {'speed-up CPU':>12}"
     side = f" | in-process {INPROCESS_SPP} spp, M samples/s" if args.inprocess else ""
@@ -268,6 +296,7 @@ def scaling(args: argparse.Namespace) -> None:
     scene = scene_path(args.scene[0])
     load = os.getloadavg()
     print(f"# {scene.name}; cores {os.cpu_count()}, load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    print(f"# cpu: {cpu_description()}")
     samples = args.res * args.res * args.spp
     defines = {"res": args.res, "spp": args.spp, "max_depth": args.max_depth}
     print(f"## threads: fgf.render in-process, {args.res}x{args.res}, {args.spp} spp, best of {args.repeats}")
