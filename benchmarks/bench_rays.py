@@ -42,6 +42,7 @@ import subprocess
 import sys
 import tempfile
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -102,11 +103,12 @@ def make_rays(p: np.ndarray, tris: np.ndarray, n: int, seed: int = 5) -> dict[st
     }
 
 
-def run(cmd: list[str], env: dict[str, str]) -> dict:
+def run(cmd: list[str], env: dict[str, str]) -> dict[str, Any]:
     out = subprocess.run(cmd, capture_output=True, text=True, env=env)
     if out.returncode != 0:
         sys.exit(f"bench_rays: {' '.join(cmd[:3])} failed:\n{out.stderr.strip()}")
-    return json.loads(out.stdout.strip().splitlines()[-1])
+    result: dict[str, Any] = json.loads(out.stdout.strip().splitlines()[-1])
+    return result
 
 
 def main() -> int:

@@ -62,7 +62,7 @@ import sys
 import tempfile
 import time
 from pathlib import Path
-from typing import Any
+from typing import Any, Callable
 
 # numpy's OpenBLAS threads spin on the same cores as the renderers; the
 # benchmark does no linear algebra.
@@ -169,7 +169,7 @@ def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, Any]
             for name in order:
                 runs[name].append(timed(cmds[name], env))
         diff = mean_difference(Path(tmp) / "fgf.exr", Path(tmp) / "mitsuba.exr")
-    out = {
+    out: dict[str, dict[str, Any]] = {
         name: {"wall": statistics.median(r[0] for r in rs), "cpu": statistics.median(r[1] for r in rs)}
         for name, rs in runs.items()
     }
@@ -197,7 +197,7 @@ def self_cpu() -> float:
     return r.ru_utime + r.ru_stime
 
 
-def best_of(render, repeat: int) -> dict[str, float]:
+def best_of(render: Callable[[int], object], repeat: int) -> dict[str, float]:
     """One warm-up render, then `repeat` timed ones (seeds 0, 1, ...): the
     fastest wall time and the least CPU time of this process."""
     render(1000)
@@ -222,7 +222,8 @@ def mitsuba_worker(scene: str, res: int, spp: int, max_depth: int, repeat: int, 
     sc = mi.load_file(scene, res=str(res), spp=str(spp), max_depth=str(max_depth))
 
     def render(seed: int) -> None:
-        img = mi.render(sc, spp=spp, seed=seed)
+        # (Mitsuba takes a Python int for the seed; its stub asks for mi.UInt32.)
+        img = mi.render(sc, spp=spp, seed=seed)  # type: ignore[arg-type]
         dr.eval(img)
         dr.sync_thread()
 
