@@ -4,6 +4,7 @@
 //! Sampling routines take their uniform variates `u ∈ [0,1)` as arguments
 //! and come with their pdf (pbrt-v4's habit), so they can be tested alone.
 
+use crate::lanes::{D8, F8};
 use fgf_core::rng::{mix64, stream_key, SECOND_WORD};
 use glam::Vec3A;
 use rand::RngCore;
@@ -21,6 +22,14 @@ pub struct Sampler {
 impl Sampler {
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
         Self::for_sample(Self::pixel_key(Self::seed_key(seed), pixel), sample)
+    }
+
+    /// A stream for a slot that no sample uses (cheap to make).
+    #[inline]
+    pub fn idle() -> Self {
+        Sampler {
+            rng: Pcg32::new(0, 1),
+        }
     }
 
     /// The first step of [`Self::new`], which a renderer computes once per
@@ -260,26 +269,46 @@ pub fn sin_cos_2pi(u: f32) -> (f32, f32) {
     let r = ud - (t - ROUND_SHIFT) * 0.25;
     let q = t.to_bits();
     let z = r * r;
-    const S: [f64; 4] = [
-        6.283185287812946,
-        -41.34166257054795,
-        81.59254287130155,
-        -75.40161270274746,
-    ];
-    const C: [f64; 4] = [
-        -19.739208789987508,
-        64.93936905141977,
-        -85.44882008965106,
-        59.424105981756476,
-    ];
-    let s = r * (S[0] + z * (S[1] + z * (S[2] + z * S[3])));
-    let c = 1.0 + z * (C[0] + z * (C[1] + z * (C[2] + z * C[3])));
+    let s = r * (SIN_2PI[0] + z * (SIN_2PI[1] + z * (SIN_2PI[2] + z * SIN_2PI[3])));
+    let c = 1.0 + z * (COS_2PI[0] + z * (COS_2PI[1] + z * (COS_2PI[2] + z * COS_2PI[3])));
     // Quarter turns: (sin, cos) → (cos, -sin) → (-sin, -cos) → (-cos, sin).
     let (s, c) = if q & 1 == 0 { (s, c) } else { (c, s) };
     let sin = f64::from_bits(s.to_bits() ^ ((q & 2) << 62));
     let cos = f64::from_bits(c.to_bits() ^ ((q.wrapping_add(1) & 2) << 62));
     (sin as f32, cos as f32)
 }
+
+/// [`sin_cos_2pi`] of eight lanes, each with the scalar function's bits.
+#[inline(always)]
+pub(crate) fn sin_cos_2pi8(u: F8) -> (F8, F8) {
+    let ud = u.to_f64();
+    let shift = D8::splat(ROUND_SHIFT);
+    let t = ud.mul(D8::splat(4.0)).add(shift);
+    let r = ud.sub(t.sub(shift).mul(D8::splat(0.25)));
+    let z = r.mul(r);
+    let poly = |k: &[f64; 4]| {
+        let k = k.map(D8::splat);
+        k[0].add(z.mul(k[1].add(z.mul(k[2].add(z.mul(k[3]))))))
+    };
+    let s = r.mul(poly(&SIN_2PI));
+    let c = D8::splat(1.0).add(z.mul(poly(&COS_2PI)));
+    let (s, c) = D8::quarter_turns(t, s, c);
+    (s.to_f32(), c.to_f32())
+}
+
+/// [`sin_cos_2pi`]'s polynomials: `sin 2πr = r·S(r²)`, `cos 2πr = 1 + r²·C(r²)`.
+const SIN_2PI: [f64; 4] = [
+    6.283185287812946,
+    -41.34166257054795,
+    81.59254287130155,
+    -75.40161270274746,
+];
+const COS_2PI: [f64; 4] = [
+    -19.739208789987508,
+    64.93936905141977,
+    -85.44882008965106,
+    59.424105981756476,
+];
 
 /// `atan2(y, x)` in radians for f32, inline (the environment map's
 /// longitude), with IEEE's signs: `(-π, π]`, `atan2(±0, +0) = ±0`,
