@@ -1,5 +1,6 @@
 //! Eight lanes per instruction: `F8` (`f32`), `I8` (`i32`, also used as
-//! unsigned indices), `D8` (`f64`, two registers) and the lane mask `M8`.
+//! unsigned indices), `D8` (`f64`, two registers) and the lane masks `M8`
+//! (of `F8` and `I8`) and `MD8` (of `D8`).
 //! The BVH's 8-wide nodes and leaf packs use `F8`; the kernels that shade
 //! eight paths at once (the environment map's sampler, see
 //! [`crate::emitter::envmap`]) use all four.
@@ -125,6 +126,26 @@ mod avx {
         pub fn lt(self, b: F8) -> M8 {
             M8(unsafe { _mm256_cmp_ps::<_CMP_LT_OQ>(self.0, b.0) })
         }
+        /// `-self` (the sign bit flipped).
+        #[inline(always)]
+        pub fn neg(self) -> F8 {
+            F8(unsafe { _mm256_xor_ps(self.0, _mm256_set1_ps(-0.0)) })
+        }
+        /// `self` with the sign of `sign`.
+        #[inline(always)]
+        pub fn copysign(self, sign: F8) -> F8 {
+            unsafe {
+                let m = _mm256_set1_ps(-0.0);
+                F8(_mm256_or_ps(
+                    _mm256_andnot_ps(m, self.0),
+                    _mm256_and_ps(m, sign.0),
+                ))
+            }
+        }
+        #[inline(always)]
+        pub fn floor(self) -> F8 {
+            F8(unsafe { _mm256_floor_ps(self.0) })
+        }
         /// Toward zero; `i32::MIN` for NaN and lanes outside the `i32` range.
         #[inline(always)]
         pub fn trunc(self) -> I8 {
@@ -240,6 +261,28 @@ mod avx {
         }
     }
 
+    /// A mask of `D8` lanes (all bits set or clear per 64-bit lane).
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct MD8([__m256d; 2]);
+
+    impl MD8 {
+        /// `a` where the mask holds, else `b`.
+        #[inline(always)]
+        pub fn select(self, a: D8, b: D8) -> D8 {
+            unsafe {
+                D8([
+                    _mm256_blendv_pd(b.0[0], a.0[0], self.0[0]),
+                    _mm256_blendv_pd(b.0[1], a.0[1], self.0[1]),
+                ])
+            }
+        }
+        /// Bit `i` set where lane `i` holds.
+        #[cfg(test)]
+        pub fn bitmask(self) -> u32 {
+            unsafe { (_mm256_movemask_pd(self.0[0]) | _mm256_movemask_pd(self.0[1]) << 4) as u32 }
+        }
+    }
+
     impl D8 {
         #[inline(always)]
         pub fn splat(x: f64) -> D8 {
@@ -260,6 +303,66 @@ mod avx {
         #[inline(always)]
         pub fn mul(self, b: D8) -> D8 {
             self.zip(b, |x, y| unsafe { _mm256_mul_pd(x, y) })
+        }
+        #[inline(always)]
+        pub fn div(self, b: D8) -> D8 {
+            self.zip(b, |x, y| unsafe { _mm256_div_pd(x, y) })
+        }
+        #[inline(always)]
+        pub fn sqrt(self) -> D8 {
+            let s = |x| unsafe { _mm256_sqrt_pd(x) };
+            D8([s(self.0[0]), s(self.0[1])])
+        }
+        /// `|self|` (the sign bit cleared).
+        #[inline(always)]
+        pub fn abs(self) -> D8 {
+            let a = |x| unsafe { _mm256_andnot_pd(_mm256_set1_pd(-0.0), x) };
+            D8([a(self.0[0]), a(self.0[1])])
+        }
+        /// `self` with the sign of `sign`.
+        #[inline(always)]
+        pub fn copysign(self, sign: D8) -> D8 {
+            self.zip(sign, |x, y| unsafe {
+                let m = _mm256_set1_pd(-0.0);
+                _mm256_or_pd(_mm256_andnot_pd(m, x), _mm256_and_pd(m, y))
+            })
+        }
+        #[inline(always)]
+        fn cmp<const C: i32>(self, b: D8) -> MD8 {
+            unsafe {
+                MD8([
+                    _mm256_cmp_pd::<C>(self.0[0], b.0[0]),
+                    _mm256_cmp_pd::<C>(self.0[1], b.0[1]),
+                ])
+            }
+        }
+        /// The lanes where `self > b` (false for NaN).
+        #[inline(always)]
+        pub fn gt(self, b: D8) -> MD8 {
+            self.cmp::<_CMP_GT_OQ>(b)
+        }
+        /// The lanes where `self < b` (false for NaN).
+        #[inline(always)]
+        pub fn lt(self, b: D8) -> MD8 {
+            self.cmp::<_CMP_LT_OQ>(b)
+        }
+        /// The lanes where `self == b` (false for NaN).
+        #[inline(always)]
+        pub fn eq(self, b: D8) -> MD8 {
+            self.cmp::<_CMP_EQ_OQ>(b)
+        }
+        /// The lanes with the sign bit set.
+        #[inline(always)]
+        pub fn sign_negative(self) -> MD8 {
+            // The sign bit is the blend's selector: lanes of -0.0 and negative NaNs too.
+            let s = |x| unsafe {
+                _mm256_blendv_pd(
+                    _mm256_setzero_pd(),
+                    _mm256_castsi256_pd(_mm256_set1_epi64x(-1)),
+                    x,
+                )
+            };
+            MD8([s(self.0[0]), s(self.0[1])])
         }
         /// Each lane narrowed to `f32` (rounded to nearest).
         #[inline(always)]
@@ -423,6 +526,19 @@ mod portable {
             M8([self.0[0].cmplt(b.0[0]), self.0[1].cmplt(b.0[1])])
         }
         #[inline(always)]
+        pub fn neg(self) -> F8 {
+            F8::from_array(self.to_array().map(|x| -x))
+        }
+        #[inline(always)]
+        pub fn copysign(self, sign: F8) -> F8 {
+            let (a, b) = (self.to_array(), sign.to_array());
+            F8::from_array(std::array::from_fn(|l| a[l].copysign(b[l])))
+        }
+        #[inline(always)]
+        pub fn floor(self) -> F8 {
+            F8::from_array(self.to_array().map(f32::floor))
+        }
+        #[inline(always)]
         pub fn trunc(self) -> I8 {
             I8(self.to_array().map(|x| {
                 // `cvttps2dq`: the range is [-2^31, 2^31).
@@ -500,6 +616,22 @@ mod portable {
         }
     }
 
+    #[derive(Clone, Copy, Debug)]
+    pub(crate) struct MD8([bool; 8]);
+
+    impl MD8 {
+        #[inline(always)]
+        pub fn select(self, a: D8, b: D8) -> D8 {
+            D8(std::array::from_fn(
+                |l| if self.0[l] { a.0[l] } else { b.0[l] },
+            ))
+        }
+        #[cfg(test)]
+        pub fn bitmask(self) -> u32 {
+            (0..8).map(|l| (self.0[l] as u32) << l).sum()
+        }
+    }
+
     impl D8 {
         #[inline(always)]
         pub fn splat(x: f64) -> D8 {
@@ -520,6 +652,42 @@ mod portable {
         #[inline(always)]
         pub fn mul(self, b: D8) -> D8 {
             self.zip(b, |x, y| x * y)
+        }
+        #[inline(always)]
+        pub fn div(self, b: D8) -> D8 {
+            self.zip(b, |x, y| x / y)
+        }
+        #[inline(always)]
+        pub fn sqrt(self) -> D8 {
+            D8(self.0.map(f64::sqrt))
+        }
+        #[inline(always)]
+        pub fn abs(self) -> D8 {
+            D8(self.0.map(f64::abs))
+        }
+        #[inline(always)]
+        pub fn copysign(self, sign: D8) -> D8 {
+            self.zip(sign, f64::copysign)
+        }
+        #[inline(always)]
+        fn cmp(self, b: D8, f: impl Fn(f64, f64) -> bool) -> MD8 {
+            MD8(std::array::from_fn(|l| f(self.0[l], b.0[l])))
+        }
+        #[inline(always)]
+        pub fn gt(self, b: D8) -> MD8 {
+            self.cmp(b, |x, y| x > y)
+        }
+        #[inline(always)]
+        pub fn lt(self, b: D8) -> MD8 {
+            self.cmp(b, |x, y| x < y)
+        }
+        #[inline(always)]
+        pub fn eq(self, b: D8) -> MD8 {
+            self.cmp(b, |x, y| x == y)
+        }
+        #[inline(always)]
+        pub fn sign_negative(self) -> MD8 {
+            MD8(self.0.map(f64::is_sign_negative))
         }
         #[inline(always)]
         pub fn to_f32(self) -> F8 {
@@ -645,6 +813,31 @@ mod tests {
             let (qs, qc) = D8::quarter_turns(t, da, db);
             let (pqs, pqc) = PD::quarter_turns(pt, pda, pdb);
             assert_eq!((f(qs), f(qc)), (pf(pqs), pf(pqc)));
+            // Signs, rounding down, and the doubles' comparisons and selects.
+            assert_eq!(bits(fa.neg().to_array()), bits(pa.neg().to_array()));
+            assert_eq!(
+                bits(fa.copysign(fb).to_array()),
+                bits(pa.copysign(pb).to_array())
+            );
+            assert_eq!(bits(fa.floor().to_array()), bits(pa.floor().to_array()));
+            assert_eq!(f(da.div(db)), pf(pda.div(pdb)));
+            assert_eq!(f(da.sqrt()), pf(pda.sqrt()));
+            assert_eq!(f(da.abs()), pf(pda.abs()));
+            assert_eq!(f(da.copysign(db)), pf(pda.copysign(pdb)));
+            for (m, pm) in [
+                (da.gt(db), pda.gt(pdb)),
+                (da.lt(db), pda.lt(pdb)),
+                (da.eq(db), pda.eq(pdb)),
+                (da.sign_negative(), pda.sign_negative()),
+            ] {
+                assert_eq!(m.bitmask(), pm.bitmask());
+                assert_eq!(f(m.select(da, db)), pf(pm.select(pda, pdb)));
+            }
+            assert_eq!(
+                da.eq(da).bitmask(),
+                fa.le(fa).bitmask(),
+                "NaN lanes are unequal"
+            );
             // The NaN rule itself: the second operand.
             for l in 0..8 {
                 let (x, y) = (a[l], b[l]);

@@ -314,15 +314,7 @@ impl Envmap {
         let (st, ct) = math::sin_cos_2pi8(F8::splat(0.5).mul(gv));
         let (sp, cp) = math::sin_cos_2pi8(gu.add(F8::splat(0.5 / self.w as f32)));
         let local = [sp.mul(st), ct, F8::splat(0.0).sub(cp).mul(st)];
-        let m = self.to_world.to_cols_array_2d();
-        // `to_world · local` and its normalisation, as glam computes them.
-        let w: [F8; 3] = std::array::from_fn(|r| {
-            let c = |k: usize| F8::splat(m[k][r]).mul(local[k]);
-            c(0).add(c(1)).add(c(2))
-        });
-        let len2 = w[0].mul(w[0]).add(w[1].mul(w[1])).add(w[2].mul(w[2]));
-        let len = len2.sqrt();
-        let d = w.map(|x| x.div(len));
+        let d = mul_normalize8(self.to_world, local);
         let cell = F8::gather(&self.cell_pdf, j.mul(I8::splat(nx)).add(i));
         let pdf = cell.div(F8::splat(2.0 * PI * PI).mul(st));
         let zero = F8::splat(0.0);
@@ -332,6 +324,33 @@ impl Envmap {
             pdf,
             ok: zero.lt(st).and(zero.lt(pdf)),
         }
+    }
+
+    /// [`Self::eval_pdf`] of eight world directions `d` (x, y, z), with
+    /// the scalar function's bits in each lane.
+    #[inline(always)]
+    pub(crate) fn eval_pdf8(&self, d: [F8; 3]) -> ([F8; 3], F8) {
+        let (u, v, sin_t) = self.grid_uv8(d);
+        let (nx, ny) = (self.w as i32, self.h as i32 - 1);
+        let i = bin_index8(u.mul(F8::splat(nx as f32)), nx);
+        let j = bin_index8(v.mul(F8::splat(ny as f32)), ny);
+        let cell = F8::gather(&self.cell_pdf, j.mul(I8::splat(nx)).add(i));
+        let pdf = cell.div(F8::splat(2.0 * PI * PI).mul(sin_t));
+        let zero = F8::splat(0.0);
+        (self.lookup8(u, v), sin_t.le(zero).select(zero, pdf))
+    }
+
+    /// [`Self::grid_uv`] of eight lanes.
+    #[inline(always)]
+    fn grid_uv8(&self, d: [F8; 3]) -> (F8, F8, F8) {
+        let l = mul_normalize8(self.to_local, d);
+        let u = math::atan2_8(l[0], l[2].neg())
+            .mul(F8::splat(0.5 / PI))
+            .sub(F8::splat(0.5 / self.w as f32));
+        let y = F8::splat(1.0).min(F8::splat(-1.0).max(l[1]));
+        let v = math::acos8(y).mul(F8::splat(1.0 / PI));
+        let sin_t = l[0].mul(l[0]).add(l[2].mul(l[2])).sqrt();
+        (u.sub(u.floor()), v, sin_t)
     }
 
     /// [`Self::lookup`] of eight lanes.
@@ -363,6 +382,24 @@ impl Envmap {
             a.mul(gy).add(b.mul(fy))
         })
     }
+}
+
+/// `(m · v).normalize()` of eight vectors `v` (x, y, z), as glam computes
+/// it for a `Vec3A`: the columns of `m` scaled and summed in order, then
+/// divided by the square root of `(x² + y²) + z²`.
+#[inline(always)]
+fn mul_normalize8(m: Mat3, v: [F8; 3]) -> [F8; 3] {
+    let m = m.to_cols_array_2d();
+    let w: [F8; 3] = std::array::from_fn(|r| {
+        let c = |k: usize| F8::splat(m[k][r]).mul(v[k]);
+        c(0).add(c(1)).add(c(2))
+    });
+    let len = w[0]
+        .mul(w[0])
+        .add(w[1].mul(w[1]))
+        .add(w[2].mul(w[2]))
+        .sqrt();
+    w.map(|x| x.div(len))
 }
 
 /// [`bin_index`] of eight lanes, for `x < 2³¹` (NaN and negative lanes give 0).
@@ -564,6 +601,41 @@ mod tests {
             "importance {mi} vs uniform {mu} ± {se_u}"
         );
     }
+    /// [`Envmap::eval_pdf8`] gives each lane the scalar function's bits, on
+    /// random directions, the poles, the seam and zero components.
+    #[test]
+    fn eval_pdf8_is_eval_pdf() {
+        let e = map();
+        let mut rng = Pcg64::seed_from_u64(23);
+        let special = [
+            Vec3A::Y,
+            -Vec3A::Y,
+            Vec3A::Z,
+            -Vec3A::Z,
+            Vec3A::X,
+            Vec3A::new(0.0, 0.6, -0.8),
+            Vec3A::new(-0.0, -0.6, -0.8),
+            e.to_world * Vec3A::new(1e-8, 1.0, 0.0),
+        ];
+        for round in 0..20_000 {
+            let d: [Vec3A; 8] = if round == 0 {
+                special
+            } else {
+                std::array::from_fn(|_| sample_uniform_sphere([rng.random(), rng.random()]))
+            };
+            let lanes = [0, 1, 2].map(|c| F8::from_array(d.map(|v| v[c])));
+            let (v, pdf) = e.eval_pdf8(lanes);
+            let (v, pdf) = (v.map(F8::to_array), pdf.to_array());
+            for l in 0..8 {
+                let (sv, sp) = e.eval_pdf(d[l]);
+                let wv = Vec3A::new(v[0][l], v[1][l], v[2][l]);
+                let bits = |x: Vec3A| x.to_array().map(f32::to_bits);
+                assert_eq!(bits(wv), bits(sv), "{:?}", d[l]);
+                assert_eq!(pdf[l].to_bits(), sp.to_bits(), "{:?}", d[l]);
+            }
+        }
+    }
+
     /// The eight lanes give each lane the scalar sample's bits, on random
     /// variates and at the ends of their range.
     #[test]

@@ -103,6 +103,23 @@ struct SurfaceStop<'w> {
     nee: bool,
 }
 
+/// Where [`World::path_advance`] leaves a path that goes on.
+// (Stops are written in place in fixed arrays and not moved; boxing the
+// large variant would allocate at every surface interaction.)
+#[allow(clippy::large_enum_variant)]
+enum Stop<'w> {
+    /// At a surface interaction, to scatter there.
+    Surface(SurfaceStop<'w>),
+    /// Escaped to the environment map (only for paths in step).
+    Escaped,
+}
+
+/// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
+#[inline(always)]
+fn lanes8(a: &[f32; BEAM], c: usize) -> F8 {
+    F8::from_array(std::array::from_fn(|l| a[(c + l) % BEAM]))
+}
+
 /// The light sample of a surface's next-event estimation.
 enum NeeLight {
     /// To be drawn from the path's sampler when it is needed.
@@ -186,12 +203,13 @@ impl World {
     /// [`Self::li_seen`] of each of the camera samples of a beam (at most
     /// [`BEAM`]; `rays`, `t_max`, `first` and `s` per sample), written to
     /// `out`, for a scene lit by the environment map `env` alone, without
-    /// media ([`Self::lone_envmap`]). The paths
-    /// go on in step, a surface interaction each per round, so that the
-    /// light samples of their next-event estimations are drawn together
-    /// ([`Envmap::sample8`]). Each path draws from its own sampler in the
-    /// order [`Self::li_path`] does, and the lanes give the scalar
-    /// sampler's bits: each sample is the one `li_seen` gives.
+    /// media ([`Self::lone_envmap`]). The paths go on in step, a surface
+    /// interaction each per round, so that the light samples of their
+    /// next-event estimations are drawn together ([`Envmap::sample8`]), and
+    /// the radiance of the environment found by those that escape is looked
+    /// up together ([`Envmap::eval_pdf8`]). Each path draws from its own
+    /// sampler in the order [`Self::li_path`] does, and the lanes give the
+    /// scalar functions' bits: each sample is the one `li_seen` gives.
     pub(crate) fn li_beam(
         &self,
         env: &Envmap,
@@ -212,39 +230,62 @@ impl World {
             paths[j] = self.path_start(rays[j], t_max[j], known, &mut s[j]);
             out[j] = Spectrum::ZERO;
         }
-        // Per round: each live path's next surface interaction, and the
-        // lanes (and variates) of those whose next-event estimation needs a
-        // light sample, with the samples drawn for them.
-        let mut stops: [Option<SurfaceStop>; BEAM] = std::array::from_fn(|_| None);
+        // Per round: each live path's next stop; the lanes (and variates)
+        // of those whose next-event estimation needs a light sample, with the
+        // samples drawn for them; the lanes of those that escaped.
+        let mut stops: [Option<Stop>; BEAM] = std::array::from_fn(|_| None);
         let mut need = [0usize; BEAM];
         let mut u = [[0f32; BEAM]; 2];
         let mut light: [Option<LightSample>; BEAM] = [None; BEAM];
+        let mut escaped = [0usize; BEAM];
+        let mut dirs = [[0f32; BEAM]; 3];
         loop {
-            let (mut n_need, mut any) = (0, false);
+            let (mut n_need, mut n_escaped, mut any) = (0, 0, false);
             for j in 0..m {
                 let Some(st) = &mut paths[j] else { continue };
                 // (Written in place: a stop is some 300 bytes.)
                 stops[j] = self.path_advance::<false>(st, &mut s[j]);
-                let Some(stop) = &stops[j] else {
-                    out[j] = st.l;
+                match &stops[j] {
+                    None => {
+                        out[j] = st.l;
+                        paths[j] = None;
+                    }
+                    Some(Stop::Escaped) => {
+                        for (c, d) in dirs.iter_mut().enumerate() {
+                            d[n_escaped] = st.ray.d[c];
+                        }
+                        escaped[n_escaped] = j;
+                        n_escaped += 1;
+                    }
+                    Some(Stop::Surface(stop)) => {
+                        any = true;
+                        if stop.nee {
+                            let (_, _, uj) = self.draw_emitter(&mut s[j]);
+                            (u[0][n_need], u[1][n_need]) = (uj[0], uj[1]);
+                            need[n_need] = j;
+                            n_need += 1;
+                        }
+                    }
+                }
+            }
+            // The escaped paths end with the environment's radiance.
+            for c in (0..n_escaped).step_by(8) {
+                let (v, pdf) = env.eval_pdf8(dirs.each_ref().map(|d| lanes8(d, c)));
+                let (v, pdf) = (v.map(F8::to_array), pdf.to_array());
+                for l in 0..(n_escaped - c).min(8) {
+                    let j = escaped[c + l];
+                    if let Some(st) = &mut paths[j] {
+                        self.add_environment(st, Vec3A::new(v[0][l], v[1][l], v[2][l]), pdf[l]);
+                        out[j] = st.l;
+                    }
                     paths[j] = None;
-                    continue;
-                };
-                any = true;
-                if stop.nee {
-                    let (_, _, uj) = self.draw_emitter(&mut s[j]);
-                    (u[0][n_need], u[1][n_need]) = (uj[0], uj[1]);
-                    need[n_need] = j;
-                    n_need += 1;
                 }
             }
             if !any {
                 break;
             }
             for c in (0..n_need).step_by(8) {
-                let lanes =
-                    |u: &[f32; BEAM]| F8::from_array(std::array::from_fn(|l| u[(c + l) % BEAM]));
-                let r = env.sample8(lanes(&u[0]), lanes(&u[1]));
+                let r = env.sample8(lanes8(&u[0], c), lanes8(&u[1], c));
                 let (ok, d, v, p) = (
                     r.ok.bitmask(),
                     r.d.map(F8::to_array),
@@ -258,7 +299,7 @@ impl World {
                 }
             }
             for j in 0..m {
-                let (Some(stop), Some(st)) = (&stops[j], &mut paths[j]) else {
+                let (Some(Stop::Surface(stop)), Some(st)) = (&stops[j], &mut paths[j]) else {
                     continue;
                 };
                 let nee = if stop.nee {
@@ -290,7 +331,7 @@ impl World {
         let Some(mut st) = self.path_start(ray, t_max_primary, known, s) else {
             return Spectrum::ZERO;
         };
-        while let Some(stop) = self.path_advance::<true>(&mut st, s) {
+        while let Some(Stop::Surface(stop)) = self.path_advance::<true>(&mut st, s) {
             if !self.path_scatter(&mut st, &stop, NeeLight::Draw, s) {
                 break;
             }
@@ -338,14 +379,17 @@ impl World {
     /// null boundaries and emission found on the way. `None` when the
     /// path ends first; then `st.l` is its radiance.
     ///
-    /// `MEDIA`: the scene may have media; without, the path's medium is
-    /// always `None` and the code for media is left out.
+    /// `ALONE`: the path goes on alone ([`Self::li_path`]). Otherwise it
+    /// goes on in step with others ([`Self::li_beam`]): the scene has no
+    /// media (the code for them is left out), and a path that escapes to
+    /// the environment map stops with [`Stop::Escaped`], before its
+    /// radiance is looked up.
     #[inline(always)]
-    fn path_advance<'w, const MEDIA: bool>(
+    fn path_advance<'w, const ALONE: bool>(
         &'w self,
         st: &mut PathState,
         s: &mut Sampler,
-    ) -> Option<SurfaceStop<'w>> {
+    ) -> Option<Stop<'w>> {
         loop {
             // Invariant loads from the world are made here, at their use,
             // not hoisted before the loop: hoisted, they were spilled to the
@@ -371,7 +415,7 @@ impl World {
                 Known::Unknown => (world.geom.intersect(&ray, st.t_max), Known::Unknown),
             };
             let t_surf = hit.map_or(st.t_max, |h| h.t);
-            if let (true, Some(m)) = (MEDIA, st.medium) {
+            if let (true, Some(m)) = (ALONE, st.medium) {
                 let med = &world.media[m as usize];
                 let (ds, r) = med.sample_distance_spectral(&ray, t_surf, st.start, st.hero, s);
                 st.thr *= ds.weight;
@@ -429,15 +473,13 @@ impl World {
                 // Escaped: the environment, if any.
                 if let Some(e) = world.env {
                     if !(st.depth == 0 && world.hide_emitters) {
+                        if !ALONE {
+                            return Some(Stop::Escaped);
+                        }
                         if let Some((radiance, env_pdf)) =
                             world.emitters[e as usize].environment(ray.d)
                         {
-                            let w = if st.specular {
-                                1.0
-                            } else {
-                                mis_power(st.prev_pdf, env_pdf * world.select_pdf())
-                            };
-                            st.l += st.thr * radiance * (w * st.inv_mis);
+                            world.add_environment(st, radiance, env_pdf);
                         }
                     }
                 }
@@ -503,7 +545,7 @@ impl World {
             let wi_local = frame.to_local(-ray.d);
             // Next-event estimation from the surface, in `path_scatter`.
             let nee = bsdf.is_smooth() && st.depth + 1 < world.max_depth;
-            return Some(SurfaceStop {
+            return Some(Stop::Surface(SurfaceStop {
                 h,
                 info,
                 bsdf,
@@ -511,8 +553,21 @@ impl World {
                 wi_local,
                 null_crossings,
                 nee,
-            });
+            }));
         }
+    }
+
+    /// Add the radiance `radiance` of the environment, which the path
+    /// escaped to and whose light sampling picks its direction with pdf
+    /// `env_pdf`, weighted against the path's own sample (MIS).
+    #[inline(always)]
+    fn add_environment(&self, st: &mut PathState, radiance: Spectrum, env_pdf: f32) {
+        let w = if st.specular {
+            1.0
+        } else {
+            mis_power(st.prev_pdf, env_pdf * self.select_pdf())
+        };
+        st.l += st.thr * radiance * (w * st.inv_mis);
     }
 
     /// Scatter the path at the surface interaction `stop`: next-event
