@@ -26,7 +26,7 @@ mod beam;
 
 pub use beam::{Beam, BEAM};
 
-use crate::lanes::F8;
+use super::lanes8::F8;
 use crate::math::bin_index;
 use glam::Vec3A;
 
@@ -304,10 +304,8 @@ impl Bvh {
     /// queries whose answer does not depend on the order and whose `t_max`
     /// does not shrink (any hit, every hit of a segment), which then cost
     /// less per node (shadow rays over a 120,000-triangle mesh took 24–30 %
-    /// less time, `docs/benchmarks.md`). Always inlined: the path tracer's
-    /// nearest-hit query lost it to a call when the paths' stages were
-    /// split (2 % more instructions on the homogeneous cube).
-    #[inline(always)]
+    /// less time, `docs/benchmarks.md`).
+    #[inline]
     pub fn traverse_leaves<const ORDERED: bool>(
         &self,
         o: Vec3A,

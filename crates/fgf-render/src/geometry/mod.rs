@@ -13,8 +13,8 @@
 //!
 //! * `types`: hits and primitives;
 //! * `build`: [`Geometry::build`], validation and compilation of the shapes;
-//! * [`bvh`]: the hierarchy; `pack`: the 8-wide leaf test (with the
-//!   8-lane vectors of `crate::lanes`);
+//! * [`bvh`]: the hierarchy; `pack`: the 8-wide leaf test; `lanes8`: its
+//!   8-lane vectors;
 //! * `query`: [`Geometry::intersect`], [`Geometry::intersect2`],
 //!   [`Geometry::for_each_hit`]; `sample`: [`Geometry::sample_shape`];
 //!   `uv`: [`Geometry::uv`], a hit's texture coordinates, computed only
@@ -30,6 +30,7 @@
 mod build;
 pub mod bvh;
 mod frame;
+mod lanes8;
 mod pack;
 mod query;
 mod sample;

@@ -123,18 +123,11 @@ impl World {
         if self.emitters.is_empty() {
             return None;
         }
-        let (k, u_sel, u) = self.draw_emitter(s);
-        self.emitters[k].sample(&self.geom, p, u_sel, u)
-    }
-
-    /// The draws of [`Self::sample_emitter`], in its order: the emitter
-    /// (uniformly; there must be one), then its two variates.
-    #[inline(always)]
-    pub(super) fn draw_emitter(&self, s: &mut Sampler) -> (usize, f32, [f32; 2]) {
         let n_em = self.emitters.len();
         let k = bin_index(s.next_1d() * n_em as f32, n_em);
         let u_sel = s.next_1d();
-        (k, u_sel, s.next_2d())
+        let u = s.next_2d();
+        self.emitters[k].sample(&self.geom, p, u_sel, u)
     }
 
     /// Next-event estimation from `vertex`: pick and sample a light, and
@@ -143,24 +136,13 @@ impl World {
     /// the MIS weight)`, where the pdf includes the light's selection and
     /// the weight is the power heuristic against the vertex's own sampling
     /// (1 for a delta light); the caller multiplies them into the path.
-    #[inline(always)]
+    #[inline]
     pub(super) fn direct<V: Scatterer>(
         &self,
         vertex: &V,
         s: &mut Sampler,
     ) -> Option<(Spectrum, V::Value, f32)> {
         let ls = self.sample_emitter(vertex.point(), s)?;
-        self.direct_from(vertex, ls, s)
-    }
-
-    /// [`Self::direct`] with its light sample `ls` drawn already.
-    #[inline(always)]
-    pub(super) fn direct_from<V: Scatterer>(
-        &self,
-        vertex: &V,
-        ls: LightSample,
-        s: &mut Sampler,
-    ) -> Option<(Spectrum, V::Value, f32)> {
         let (f, scatter_pdf) = vertex.toward(ls.wi)?;
         let pdf = ls.pdf * self.select_pdf();
         let tr = self.shadow(&vertex.shadow_origin(ls.wi), ls.wi, ls.dist, s);

@@ -93,7 +93,7 @@ impl Homogeneous {
     /// Free flight sampled with the pdf of channel `hero` only; returns the
     /// sample (weight = integrand / hero pdf) and the ratio `r` of every
     /// channel's pdf to the hero's (see `Medium::sample_distance_spectral`).
-    #[inline(always)]
+    #[inline]
     pub fn sample_distance_hero(
         &self,
         t_max: f32,

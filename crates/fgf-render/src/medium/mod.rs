@@ -185,7 +185,7 @@ impl Medium {
     /// whole-path pdfs (pbrt-v4's `r_u`), whose weights stay bounded by 3,
     /// unlike per-segment mixtures whose products grow with the depth.
     /// Media whose flight pdf does not depend on the channel return `r = 1`.
-    #[inline(always)]
+    #[inline]
     pub fn sample_distance_spectral(
         &self,
         ray: &Ray,
