@@ -140,18 +140,14 @@ impl Prepared {
                         let px = &mut row[3 * x..3 * x + 3];
                         let pp = &mut pend[x];
                         let err = |e| out_of_range(x, y, e);
-                        if !beams {
-                            for k in first..first + n {
-                                let (mut s, ray, t_max, weight) =
-                                    self.camera_sample(pixel_key, x, y, k);
-                                let l = self.world.li(ray, t_max, &mut s) * weight;
-                                add_sample(px, pp, &mut sq, x, l).map_err(err)?;
-                            }
-                            continue;
-                        }
-                        // The camera rays of up to `BEAM` samples of the
-                        // pixel, nearly parallel, find their first hits by
-                        // one beam query; each path then goes on alone.
+                        // The camera samples of up to `BEAM` samples of
+                        // the pixel are made first, then their paths: a
+                        // sample's start (its stream's keys, the ray and its
+                        // normalisation) is a chain of dependent multiplies,
+                        // divisions and square roots, and made together the
+                        // chains overlap. With `beams`, the rays, nearly
+                        // parallel, also find their first hits by one beam
+                        // query; each path then goes on alone.
                         let mut k = first;
                         while k < first + n {
                             let m = ((first + n - k) as usize).min(BEAM);
@@ -167,12 +163,20 @@ impl Prepared {
                                 (lanes[j], rays[j], t_max[j]) = (Some((s, weight)), ray, t);
                             }
                             let mut hits = [None; BEAM];
-                            self.world
-                                .geom
-                                .intersect_beam(&rays[..m], &t_max[..m], &mut hits[..m]);
+                            if beams {
+                                self.world.geom.intersect_beam(
+                                    &rays[..m],
+                                    &t_max[..m],
+                                    &mut hits[..m],
+                                );
+                            }
                             for (j, lane) in lanes[..m].iter_mut().enumerate() {
                                 if let Some((s, weight)) = lane {
-                                    let l = self.world.li_seen(rays[j], t_max[j], hits[j], s);
+                                    let l = if beams {
+                                        self.world.li_seen(rays[j], t_max[j], hits[j], s)
+                                    } else {
+                                        self.world.li(rays[j], t_max[j], s)
+                                    };
                                     add_sample(px, pp, &mut sq, x, l * *weight).map_err(err)?;
                                 }
                             }
@@ -390,16 +394,17 @@ mod tests {
         );
         assert_eq!(a.image, b.image, "beams against single rays");
         assert_eq!(a.variance, b.variance);
-        // Ranges 0..5, 5..19, 19..24 with passes of 8: beams of 5, 8, 6, 5.
-        let mut split = with
-            .render_range(1, 0..5, true, Some(8), &NoProgress)
-            .unwrap();
-        for r in [5..19, 19..24] {
-            let part = with.render_range(1, r, true, Some(8), &NoProgress).unwrap();
-            split.merge(&part).unwrap();
+        // Ranges 0..5, 5..19, 19..24 with passes of 8: beams (or batches of
+        // camera samples, without beams) of 5, 8, 6, 5.
+        for p in [&with, &without] {
+            let mut split = p.render_range(1, 0..5, true, Some(8), &NoProgress).unwrap();
+            for r in [5..19, 19..24] {
+                let part = p.render_range(1, r, true, Some(8), &NoProgress).unwrap();
+                split.merge(&part).unwrap();
+            }
+            let c = split.finish(24);
+            assert_eq!(a.image, c.image, "one range against three");
         }
-        let c = split.finish(24);
-        assert_eq!(a.image, c.image, "one range against three");
     }
 
     /// Shadow rays in a scene where every surface blocks take one any-hit
