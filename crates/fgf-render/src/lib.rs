@@ -14,7 +14,8 @@
 //!   (volumetric path tracing), [`medium`] (the medium interface,
 //!   homogeneous, grid and non-exponential media), [`geometry`] (shapes,
 //!   BVH, texture coordinates), [`ray`], [`bsdf`], [`texture`], [`emitter`], [`phase`], [`camera`],
-//!   [`spectrum`] (the colour type), [`math`].
+//!   [`spectrum`] (the colour type), [`math`]; `lanes`, the 8-lane vectors
+//!   of the BVH and of the kernels that shade 8 paths at once.
 //! * [`ensemble`]: ground truth from explicit realizations of `fgf` media.
 //! * [`truth`]: exact ground truth for constant-α media by quadrature over
 //!   the level of homogeneous realizations.
@@ -32,6 +33,7 @@ pub mod film;
 pub mod geometry;
 mod huge;
 pub mod integrator;
+mod lanes;
 pub mod math;
 pub mod medium;
 pub mod phase;

@@ -4,6 +4,7 @@
 //! Sampling routines take their uniform variates `u ∈ [0,1)` as arguments
 //! and come with their pdf (pbrt-v4's habit), so they can be tested alone.
 
+use crate::lanes::{D8, F8};
 use fgf_core::rng::{mix64, stream_key, SECOND_WORD};
 use glam::Vec3A;
 use rand::RngCore;
@@ -21,6 +22,14 @@ pub struct Sampler {
 impl Sampler {
     pub fn new(seed: u64, pixel: u64, sample: u64) -> Self {
         Self::for_sample(Self::pixel_key(Self::seed_key(seed), pixel), sample)
+    }
+
+    /// A stream for a slot that no sample uses (cheap to make).
+    #[inline]
+    pub fn idle() -> Self {
+        Sampler {
+            rng: Pcg32::new(0, 1),
+        }
     }
 
     /// The first step of [`Self::new`], which a renderer computes once per
@@ -260,26 +269,42 @@ pub fn sin_cos_2pi(u: f32) -> (f32, f32) {
     let r = ud - (t - ROUND_SHIFT) * 0.25;
     let q = t.to_bits();
     let z = r * r;
-    const S: [f64; 4] = [
-        6.283185287812946,
-        -41.34166257054795,
-        81.59254287130155,
-        -75.40161270274746,
-    ];
-    const C: [f64; 4] = [
-        -19.739208789987508,
-        64.93936905141977,
-        -85.44882008965106,
-        59.424105981756476,
-    ];
-    let s = r * (S[0] + z * (S[1] + z * (S[2] + z * S[3])));
-    let c = 1.0 + z * (C[0] + z * (C[1] + z * (C[2] + z * C[3])));
+    let s = r * (SIN_2PI[0] + z * (SIN_2PI[1] + z * (SIN_2PI[2] + z * SIN_2PI[3])));
+    let c = 1.0 + z * (COS_2PI[0] + z * (COS_2PI[1] + z * (COS_2PI[2] + z * COS_2PI[3])));
     // Quarter turns: (sin, cos) → (cos, -sin) → (-sin, -cos) → (-cos, sin).
     let (s, c) = if q & 1 == 0 { (s, c) } else { (c, s) };
     let sin = f64::from_bits(s.to_bits() ^ ((q & 2) << 62));
     let cos = f64::from_bits(c.to_bits() ^ ((q.wrapping_add(1) & 2) << 62));
     (sin as f32, cos as f32)
 }
+
+/// [`sin_cos_2pi`] of eight lanes, each with the scalar function's bits.
+#[inline(always)]
+pub(crate) fn sin_cos_2pi8(u: F8) -> (F8, F8) {
+    let ud = u.to_f64();
+    let shift = D8::splat(ROUND_SHIFT);
+    let t = ud.mul(D8::splat(4.0)).add(shift);
+    let r = ud.sub(t.sub(shift).mul(D8::splat(0.25)));
+    let z = r.mul(r);
+    let s = r.mul(poly8(&SIN_2PI, z));
+    let c = D8::splat(1.0).add(z.mul(poly8(&COS_2PI, z)));
+    let (s, c) = D8::quarter_turns(t, s, c);
+    (s.to_f32(), c.to_f32())
+}
+
+/// [`sin_cos_2pi`]'s polynomials: `sin 2πr = r·S(r²)`, `cos 2πr = 1 + r²·C(r²)`.
+const SIN_2PI: [f64; 4] = [
+    6.283185287812946,
+    -41.34166257054795,
+    81.59254287130155,
+    -75.40161270274746,
+];
+const COS_2PI: [f64; 4] = [
+    -19.739208789987508,
+    64.93936905141977,
+    -85.44882008965106,
+    59.424105981756476,
+];
 
 /// `atan2(y, x)` in radians for f32, inline (the environment map's
 /// longitude), with IEEE's signs: `(-π, π]`, `atan2(±0, +0) = ±0`,
@@ -305,14 +330,7 @@ pub fn atan2(y: f32, x: f32) -> f32 {
     // x = y = 0 (both ±0): r = 0, not 0/0.
     let r = num / if den == 0.0 { 1.0 } else { den };
     let z = r * r;
-    const A: [f64; 6] = [
-        0.9999999993712282,
-        -0.33333306893048514,
-        0.19998183041083206,
-        -0.14239532669648974,
-        0.10569828806414448,
-        -0.06026305227658459,
-    ];
+    const A: [f64; 6] = ATAN;
     let mut a = base + r * (A[0] + z * (A[1] + z * (A[2] + z * (A[3] + z * (A[4] + z * A[5])))));
     if ay > ax {
         a = std::f64::consts::FRAC_PI_2 - a;
@@ -321,6 +339,46 @@ pub fn atan2(y: f32, x: f32) -> f32 {
         a = std::f64::consts::PI - a;
     }
     (a as f32).copysign(y)
+}
+
+/// [`atan2`]'s polynomial: `atan r = r·A(r²)` for `|r| ≤ tan(π/8)`.
+const ATAN: [f64; 6] = [
+    0.9999999993712282,
+    -0.33333306893048514,
+    0.19998183041083206,
+    -0.14239532669648974,
+    0.10569828806414448,
+    -0.06026305227658459,
+];
+
+/// Horner's scheme of `k` at `z` in eight lanes, in the scalar functions'
+/// order: `k₀ + z·(k₁ + z·(… + z·k₅))`.
+#[inline(always)]
+fn poly8<const N: usize>(k: &[f64; N], z: D8) -> D8 {
+    let mut p = D8::splat(k[N - 1]);
+    for &c in k[..N - 1].iter().rev() {
+        p = D8::splat(c).add(z.mul(p));
+    }
+    p
+}
+
+/// [`atan2`] of eight lanes, each with the scalar function's bits.
+#[inline(always)]
+pub(crate) fn atan2_8(y: F8, x: F8) -> F8 {
+    use std::f64::consts::{FRAC_PI_2, FRAC_PI_4, PI};
+    let (xd, yd) = (x.to_f64(), y.to_f64());
+    let (ay, ax) = (yd.abs(), xd.abs());
+    let swap = ay.gt(ax);
+    let (lo, hi) = (swap.select(ax, ay), swap.select(ay, ax));
+    let big = lo.gt(D8::splat(TAN_PI_8).mul(hi));
+    let num = big.select(lo.sub(hi), lo);
+    let den = big.select(lo.add(hi), hi);
+    let base = big.select(D8::splat(FRAC_PI_4), D8::splat(0.0));
+    let r = num.div(den.eq(D8::splat(0.0)).select(D8::splat(1.0), den));
+    let a = base.add(r.mul(poly8(&ATAN, r.mul(r))));
+    let a = swap.select(D8::splat(FRAC_PI_2).sub(a), a);
+    let a = xd.sign_negative().select(D8::splat(PI).sub(a), a);
+    a.to_f32().copysign(y)
 }
 
 /// `tan(π/8) = √2 - 1`, [`atan2`]'s split.
@@ -341,14 +399,7 @@ pub fn acos(x: f32) -> f32 {
     let big = ax > 0.5;
     let w = if big { 0.5 - 0.5 * ax } else { xd * xd };
     let s = if big { w.sqrt() } else { ax };
-    const B: [f64; 6] = [
-        0.999999995983738,
-        0.16666782005775338,
-        0.07494696687423973,
-        0.045520635631714566,
-        0.02399399965364759,
-        0.04241737375979984,
-    ];
+    const B: [f64; 6] = ASIN;
     let asin_s = s * (B[0] + w * (B[1] + w * (B[2] + w * (B[3] + w * (B[4] + w * B[5])))));
     let a = if big {
         let a = 2.0 * asin_s;
@@ -361,6 +412,35 @@ pub fn acos(x: f32) -> f32 {
         std::f64::consts::FRAC_PI_2 - asin_s.copysign(xd)
     };
     a as f32
+}
+
+/// [`acos`]'s polynomial: `asin s = s·B(s²)` for `s² ≤ ¼`.
+const ASIN: [f64; 6] = [
+    0.999999995983738,
+    0.16666782005775338,
+    0.07494696687423973,
+    0.045520635631714566,
+    0.02399399965364759,
+    0.04241737375979984,
+];
+
+/// [`acos`] of eight lanes, each with the scalar function's bits.
+#[inline(always)]
+pub(crate) fn acos8(x: F8) -> F8 {
+    use std::f64::consts::{FRAC_PI_2, PI};
+    let xd = x.to_f64();
+    let ax = xd.abs();
+    let half = D8::splat(0.5);
+    let big = ax.gt(half);
+    let w = big.select(half.sub(half.mul(ax)), xd.mul(xd));
+    let s = big.select(w.sqrt(), ax);
+    let asin_s = s.mul(poly8(&ASIN, w));
+    let a_big = D8::splat(2.0).mul(asin_s);
+    let a_big = xd
+        .lt(D8::splat(0.0))
+        .select(D8::splat(PI).sub(a_big), a_big);
+    let a_small = D8::splat(FRAC_PI_2).sub(asin_s.copysign(xd));
+    big.select(a_big, a_small).to_f32()
 }
 
 #[cfg(test)]
@@ -461,6 +541,59 @@ mod tests {
             (f32::from_bits(1) as f64).ln() as f32
         );
         assert_eq!(ln(2.0), std::f32::consts::LN_2);
+    }
+
+    #[test]
+    fn lanes_are_the_scalar_functions() {
+        use crate::lanes::F8;
+        let mut s = Sampler::new(9, 1, 2);
+        let special = [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.0,
+            -1.0,
+            0.414_213_57,
+            f32::NAN,
+            1e-30,
+            -3e-39,
+            0.999_999_94,
+            -0.707_106_77,
+        ];
+        let bits = |x: [f32; 8]| x.map(f32::to_bits);
+        for round in 0..20_000 {
+            let mut pick = || -> [f32; 8] {
+                std::array::from_fn(|_| {
+                    let r = s.next_1d();
+                    match round % 3 {
+                        0 => special[(r * 12.0) as usize % 12],
+                        1 => r * 2.0 - 1.0,
+                        _ => (r - 0.5) * 40.0,
+                    }
+                })
+            };
+            let (a, b) = (pick(), pick());
+            let (sin, cos) = sin_cos_2pi8(F8::from_array(a));
+            let (at, ac) = (
+                atan2_8(F8::from_array(a), F8::from_array(b)).to_array(),
+                acos8(F8::from_array(a)).to_array(),
+            );
+            let scalar_sc = a.map(sin_cos_2pi);
+            assert_eq!(
+                bits(sin.to_array()),
+                bits(scalar_sc.map(|x| x.0)),
+                "sin {a:?}"
+            );
+            assert_eq!(
+                bits(cos.to_array()),
+                bits(scalar_sc.map(|x| x.1)),
+                "cos {a:?}"
+            );
+            let scalar_at: [f32; 8] = std::array::from_fn(|l| atan2(a[l], b[l]));
+            assert_eq!(bits(at), bits(scalar_at), "atan2 {a:?} {b:?}");
+            assert_eq!(bits(ac), bits(a.map(acos)), "acos {a:?}");
+        }
     }
 
     #[test]

@@ -61,6 +61,10 @@ pub struct Prepared {
     /// ([`crate::geometry::Geometry::intersect_beam`]) where the integrator
     /// allows it; off, each alone (the reference the tests compare with).
     beams: bool,
+    /// The paths of a beam go on in step where the scene is lit by an
+    /// environment map alone ([`World::li_beam`]); off, each alone (the
+    /// reference the tests compare with).
+    lockstep: bool,
     /// The scene's `sample_count`.
     pub spp: u32,
     /// The scene's sampler seed.
@@ -76,6 +80,7 @@ impl Prepared {
         let (width, height) = (world.camera.width as usize, world.camera.height as usize);
         Ok(Prepared {
             beams: world.takes_first_hit(),
+            lockstep: true,
             world,
             filter: Filter::new(&scene.sensor.rfilter),
             spp: scene.sensor.spp,
@@ -118,6 +123,11 @@ impl Prepared {
         let mut pending_sq = vec![[0f64; 3]; if variance { w * h } else { 0 }];
         let seed_key = Sampler::seed_key(seed);
         let beams = self.beams;
+        let lone_envmap = if self.lockstep {
+            self.world.lone_envmap()
+        } else {
+            None
+        };
         let mut next = samples.start;
         let out_of_range =
             |x: usize, y: usize, (channel, value): (usize, f64)| RenderError::OutOfRange {
@@ -147,20 +157,23 @@ impl Prepared {
                         // divisions and square roots, and made together the
                         // chains overlap. With `beams`, the rays, nearly
                         // parallel, also find their first hits by one beam
-                        // query; each path then goes on alone.
+                        // query; each path then goes on alone, or all in
+                        // step where their light samples are drawn together
+                        // (`World::li_beam`).
                         let mut k = first;
                         while k < first + n {
                             let m = ((first + n - k) as usize).min(BEAM);
-                            let mut lanes: [Option<(Sampler, f32)>; BEAM] = Default::default();
+                            let mut samplers: [Sampler; BEAM] =
+                                std::array::from_fn(|_| Sampler::idle());
+                            let mut weights = [0f32; BEAM];
                             let mut rays = [Ray {
                                 o: Vec3A::ZERO,
                                 d: Vec3A::Z,
                             }; BEAM];
                             let mut t_max = [0f32; BEAM];
                             for j in 0..m {
-                                let (s, ray, t, weight) =
+                                (samplers[j], rays[j], t_max[j], weights[j]) =
                                     self.camera_sample(pixel_key, x, y, k + j as u32);
-                                (lanes[j], rays[j], t_max[j]) = (Some((s, weight)), ray, t);
                             }
                             let mut hits = [None; BEAM];
                             if beams {
@@ -170,15 +183,29 @@ impl Prepared {
                                     &mut hits[..m],
                                 );
                             }
-                            for (j, lane) in lanes[..m].iter_mut().enumerate() {
-                                if let Some((s, weight)) = lane {
-                                    let l = if beams {
-                                        self.world.li_seen(rays[j], t_max[j], hits[j], s)
-                                    } else {
-                                        self.world.li(rays[j], t_max[j], s)
-                                    };
-                                    add_sample(px, pp, &mut sq, x, l * *weight).map_err(err)?;
+                            let mut ls = [Spectrum::ZERO; BEAM];
+                            match lone_envmap {
+                                Some(env) if beams => self.world.li_beam(
+                                    env,
+                                    &rays[..m],
+                                    &t_max[..m],
+                                    &hits[..m],
+                                    &mut samplers[..m],
+                                    &mut ls[..m],
+                                ),
+                                _ => {
+                                    for j in 0..m {
+                                        let s = &mut samplers[j];
+                                        ls[j] = if beams {
+                                            self.world.li_seen(rays[j], t_max[j], hits[j], s)
+                                        } else {
+                                            self.world.li(rays[j], t_max[j], s)
+                                        };
+                                    }
                                 }
+                            }
+                            for j in 0..m {
+                                add_sample(px, pp, &mut sq, x, ls[j] * weights[j]).map_err(err)?;
                             }
                             k += m as u32;
                         }
@@ -337,6 +364,110 @@ mod tests {
             exterior: None,
         });
         desc
+    }
+
+    /// The paths of a beam in step (a scene lit by an environment map
+    /// alone) give each sample the bits of the paths traced one at a time:
+    /// a textured rough-plastic height field, a rough conductor, and a
+    /// smooth conductor and a dielectric sphere (no next-event estimation
+    /// there), under an environment map with a bright spot; full beams of
+    /// 16 and the beams of 5, 3 and 7 of split sample ranges. With a
+    /// medium, the paths go on alone.
+    #[test]
+    fn paths_in_step_match_paths_alone() {
+        let xml = r#"<scene version="3.0.0">
+            <integrator type="volpath"><integer name="max_depth" value="12"/></integrator>
+            <sensor type="perspective">
+                <float name="fov" value="55"/>
+                <transform name="to_world">
+                    <lookat origin="2, 2.4, -1.6" target="2, 0, 2" up="0, 1, 0"/>
+                </transform>
+                <sampler type="independent"><integer name="sample_count" value="32"/></sampler>
+                <film type="hdrfilm">
+                    <integer name="width" value="36"/><integer name="height" value="28"/>
+                    <rfilter type="box"/>
+                </film>
+            </sensor>
+            <shape type="rectangle">
+                <transform name="to_world">
+                    <rotate x="1" angle="-90"/><translate value="2, -0.05, 2"/><scale value="3"/>
+                </transform>
+                <bsdf type="roughconductor"><float name="alpha" value="0.3"/></bsdf>
+            </shape>
+            <shape type="disk">
+                <transform name="to_world"><translate value="-9, -9, -9"/></transform>
+                <bsdf type="roughplastic">
+                    <texture type="checkerboard" name="diffuse_reflectance">
+                        <transform name="to_uv"><scale x="12" y="12"/></transform>
+                    </texture>
+                    <float name="alpha" value="0.15"/>
+                </bsdf>
+            </shape>
+            <shape type="sphere">
+                <point name="center" x="1.4" y="0.6" z="2.2"/><float name="radius" value="0.5"/>
+                <bsdf type="dielectric"/>
+            </shape>
+            <shape type="sphere">
+                <point name="center" x="2.7" y="0.5" z="1.6"/><float name="radius" value="0.35"/>
+                <bsdf type="conductor"/>
+            </shape>
+        </scene>"#;
+        let mut desc = with_height_field(xml, 48);
+        let (w, h) = (32, 16);
+        let data = (0..w * h)
+            .flat_map(|i| {
+                let (x, y) = (i % w, i / w);
+                let sun = if (x, y) == (20, 5) || (x, y) == (21, 5) {
+                    400.0
+                } else {
+                    0.0
+                };
+                [
+                    0.3 + sun + 0.02 * x as f32,
+                    0.5 + sun,
+                    0.9 + sun - 0.04 * y as f32,
+                ]
+            })
+            .collect();
+        desc.emitters = vec![fgf_scene::EmitterDesc::Envmap {
+            image: std::sync::Arc::new(fgf_scene::RgbImage {
+                width: w,
+                height: h,
+                data,
+            }),
+            to_world: Mat4::from_rotation_y(0.4),
+        }];
+        let in_step = Prepared::new(&desc).unwrap();
+        assert!(in_step.beams && in_step.world.lone_envmap().is_some());
+        let mut alone = Prepared::new(&desc).unwrap();
+        alone.lockstep = false;
+        let render = |p: &Prepared, pass: u32| {
+            let mut state = p
+                .render_range(7, 0..5, true, Some(pass), &NoProgress)
+                .unwrap();
+            for r in [5..8, 8..32] {
+                let part = p.render_range(7, r, true, Some(pass), &NoProgress).unwrap();
+                state.merge(&part).unwrap();
+            }
+            state.finish(32)
+        };
+        let (a, b) = (render(&in_step, 16), render(&alone, 16));
+        assert!(
+            a.image.iter().any(|&v| v > 0.0),
+            "the image should not be black"
+        );
+        assert_eq!(a.image, b.image, "paths in step against paths alone");
+        assert_eq!(a.variance, b.variance);
+        let c = render(&in_step, 7);
+        assert_eq!(a.image, c.image, "beams of 7 against beams of 16");
+        // In a scene with a medium, the paths go on alone.
+        desc.media.push(fgf_scene::MediumDesc::Homogeneous {
+            sigma_t: [1.5; 3],
+            albedo: [0.9; 3],
+            phase: fgf_scene::PhaseDesc::Isotropic,
+            sample_emitters: true,
+        });
+        assert!(Prepared::new(&desc).unwrap().world.lone_envmap().is_none());
     }
 
     /// The beam query of a pixel's camera rays changes no path: a textured

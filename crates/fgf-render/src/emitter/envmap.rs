@@ -13,7 +13,12 @@
 //!   centre (positive wherever the radiance is); a cell is chosen from the
 //!   marginal over rows and the conditional over columns, then a point
 //!   uniformly in it. The solid-angle pdf is `p_uv / (2π² sin θ)`.
+//! * [`Envmap::sample8`] draws eight samples at once with the 8-lane
+//!   vectors of `crate::lanes` (gathers from the same tables), each with
+//!   the bits of [`Envmap::sample`]: the paths of a beam that go on in step
+//!   (`World::li_beam`) draw their light samples so.
 
+use crate::lanes::{F8, I8, M8};
 use crate::math::{self, bin_index};
 use crate::spectrum::Spectrum;
 use fgf_scene::RgbImage;
@@ -25,8 +30,9 @@ pub struct Envmap {
     /// Image width `W` and height `H`.
     w: usize,
     h: usize,
-    /// `(W + 1) × H` vertex radiances, row-major.
-    data: Vec<Spectrum>,
+    /// `(W + 1) × H` vertex radiances, row-major, as RGB and a zero (the
+    /// layout of a [`Spectrum`], which the lanes read as one table of `f32`).
+    data: Vec<[f32; 4]>,
     to_world: Mat3,
     to_local: Mat3,
     /// Cumulative row weights (`H` entries, the first 0), normalised to 1 at the end.
@@ -37,7 +43,9 @@ pub struct Envmap {
     cell_pdf: Vec<f32>,
     /// Guide tables of `row_cdf` and of each row of `col_cdf` (see [`Guide`]).
     row_guide: Guide,
-    col_guide: Vec<Guide>,
+    /// The guide tables of the rows of `col_cdf`, one after another
+    /// (`W` bins each).
+    col_start: Vec<GuideBin>,
 }
 
 /// A guide table of a cumulative table (`n + 1` entries, the first 0, the
@@ -52,9 +60,12 @@ pub struct Envmap {
 /// the cost of sampling the map.
 #[derive(Debug, Clone)]
 struct Guide {
-    /// Per bin: the interval `k` and `cdf[k]`, `cdf[k + 1]`.
-    start: Vec<(u32, f32, f32)>,
+    start: Vec<GuideBin>,
 }
+
+/// One bin of a [`Guide`]: the interval `k` and the bits of `cdf[k]` and
+/// `cdf[k + 1]` (so that the lanes read the table as one table of `u32`).
+type GuideBin = [u32; 3];
 
 impl Guide {
     fn new(cdf: &[f32]) -> Guide {
@@ -62,7 +73,7 @@ impl Guide {
         let start = (0..n)
             .map(|g| {
                 let k = pick_interval(cdf, g as f32 / n as f32);
-                (k as u32, cdf[k], cdf[k + 1])
+                [k as u32, cdf[k].to_bits(), cdf[k + 1].to_bits()]
             })
             .collect();
         Guide { start }
@@ -71,11 +82,20 @@ impl Guide {
     /// [`pick`] on `cdf`, the table this guide was made from.
     #[inline(always)]
     fn pick(&self, cdf: &[f32], u: f32) -> (usize, f32) {
+        guide_pick(&self.start, cdf, u)
+    }
+}
+
+/// [`Guide::pick`] with the guide's table `start` (`cdf.len() - 1` bins).
+#[inline(always)]
+fn guide_pick(start: &[GuideBin], cdf: &[f32], u: f32) -> (usize, f32) {
+    {
         let n = cdf.len() - 1;
         let g = bin_index(u * n as f32, n);
         // The bin's start is exact for `u` at its lower end; rounding of
         // `u · n` may put `u` just below it, hence the walk down as well.
-        let (k0, lo, hi) = self.start[g];
+        let [k0, lo, hi] = start[g];
+        let (lo, hi) = (f32::from_bits(lo), f32::from_bits(hi));
         let mut k = k0 as usize;
         if k + 1 < n && hi <= u {
             // Up: every step keeps cdf[k] <= u, so no walk down follows.
@@ -95,6 +115,12 @@ impl Guide {
     }
 }
 
+/// A vertex radiance of the table.
+#[inline(always)]
+fn texel(t: [f32; 4]) -> Spectrum {
+    Spectrum::from_vec4(glam::Vec4::from_array(t))
+}
+
 /// Luminance of linear Rec. 709 RGB.
 #[inline]
 fn luminance(c: Spectrum) -> f32 {
@@ -108,7 +134,7 @@ impl Envmap {
         for y in 0..h {
             for x in 0..=w {
                 let i = (y * w + x % w) * 3;
-                data.push(Spectrum::new(img.data[i], img.data[i + 1], img.data[i + 2]));
+                data.push([img.data[i], img.data[i + 1], img.data[i + 2], 0.0]);
             }
         }
         let (nx, ny) = (w, h - 1);
@@ -116,7 +142,7 @@ impl Envmap {
         for j in 0..ny {
             let sin_t = ((j as f64 + 0.5) / ny as f64 * std::f64::consts::PI).sin();
             for i in 0..nx {
-                let v = |x: usize, y: usize| luminance(data[y * (w + 1) + x]) as f64;
+                let v = |x: usize, y: usize| luminance(texel(data[y * (w + 1) + x])) as f64;
                 let l = 0.25 * (v(i, j) + v(i + 1, j) + v(i, j + 1) + v(i + 1, j + 1));
                 weight[j * nx + i] = l * sin_t;
             }
@@ -150,7 +176,10 @@ impl Envmap {
         let cell_pdf = weight.iter().map(|x| (x / total * cells) as f32).collect();
         let l = Mat3::from_mat4(to_world);
         let row_guide = Guide::new(&row_cdf);
-        let col_guide = col_cdf.chunks_exact(nx + 1).map(Guide::new).collect();
+        let col_start = col_cdf
+            .chunks_exact(nx + 1)
+            .flat_map(|row| Guide::new(row).start)
+            .collect();
         Envmap {
             w,
             h,
@@ -161,7 +190,7 @@ impl Envmap {
             col_cdf,
             cell_pdf,
             row_guide,
-            col_guide,
+            col_start,
         }
     }
 
@@ -187,7 +216,7 @@ impl Envmap {
         let (ix, iy) = (bin_index(x, self.w), bin_index(y, self.h - 1));
         let (fx, fy) = (x - ix as f32, y - iy as f32);
         let row = self.w + 1;
-        let at = |x: usize, y: usize| self.data[y * row + x];
+        let at = |x: usize, y: usize| texel(self.data[y * row + x]);
         let a = at(ix, iy) * (1.0 - fx) + at(ix + 1, iy) * fx;
         let b = at(ix, iy + 1) * (1.0 - fx) + at(ix + 1, iy + 1) * fx;
         a * (1.0 - fy) + b * fy
@@ -228,7 +257,11 @@ impl Envmap {
     pub fn sample(&self, u: [f32; 2]) -> Option<(Vec3A, Spectrum, f32)> {
         let (nx, ny) = (self.w, self.h - 1);
         let (j, fv) = self.row_guide.pick(&self.row_cdf, u[1]);
-        let (i, fu) = self.col_guide[j].pick(&self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)], u[0]);
+        let (i, fu) = guide_pick(
+            &self.col_start[j * nx..(j + 1) * nx],
+            &self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)],
+            u[0],
+        );
         let gu = (i as f32 + fu) / nx as f32;
         let gv = (j as f32 + fv) / ny as f32;
         // θ = π·gv and φ = 2π·(gu + ½/W), as turns.
@@ -245,6 +278,178 @@ impl Envmap {
         }
         Some((d, self.lookup(gu, gv), pdf))
     }
+}
+
+/// Light samples of eight lanes (see [`Envmap::sample8`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct EnvSample8 {
+    /// World directions, radiances (x, y, z and R, G, B) and pdfs.
+    pub d: [F8; 3],
+    pub value: [F8; 3],
+    pub pdf: F8,
+    /// The lanes with a sample (where the scalar `sample` returns `Some`).
+    pub ok: M8,
+}
+
+impl Envmap {
+    /// [`Self::sample`] of eight lanes, lane `l` at `[u0[l], u1[l]]` (both
+    /// in `[0, 1)`), with the scalar function's bits in each lane.
+    #[inline(always)]
+    pub(crate) fn sample8(&self, u0: F8, u1: F8) -> EnvSample8 {
+        let (nx, ny) = (self.w as i32, self.h as i32 - 1);
+        let row_guide = self.row_guide.start.as_flattened();
+        let (j, fv) = guide_pick8(row_guide, &self.row_cdf, ny, I8::splat(0), I8::splat(0), u1);
+        let col_guide = self.col_start.as_flattened();
+        let (i, fu) = guide_pick8(
+            col_guide,
+            &self.col_cdf,
+            nx,
+            j.mul(I8::splat(nx)),
+            j.mul(I8::splat(nx + 1)),
+            u0,
+        );
+        let gu = i.to_f32().add(fu).div(F8::splat(nx as f32));
+        let gv = j.to_f32().add(fv).div(F8::splat(ny as f32));
+        // θ = π·gv and φ = 2π·(gu + ½/W), as turns.
+        let (st, ct) = math::sin_cos_2pi8(F8::splat(0.5).mul(gv));
+        let (sp, cp) = math::sin_cos_2pi8(gu.add(F8::splat(0.5 / self.w as f32)));
+        let local = [sp.mul(st), ct, F8::splat(0.0).sub(cp).mul(st)];
+        let d = mul_normalize8(self.to_world, local);
+        let cell = F8::gather(&self.cell_pdf, j.mul(I8::splat(nx)).add(i));
+        let pdf = cell.div(F8::splat(2.0 * PI * PI).mul(st));
+        let zero = F8::splat(0.0);
+        EnvSample8 {
+            d,
+            value: self.lookup8(gu, gv),
+            pdf,
+            ok: zero.lt(st).and(zero.lt(pdf)),
+        }
+    }
+
+    /// [`Self::eval_pdf`] of eight world directions `d` (x, y, z), with
+    /// the scalar function's bits in each lane.
+    #[inline(always)]
+    pub(crate) fn eval_pdf8(&self, d: [F8; 3]) -> ([F8; 3], F8) {
+        let (u, v, sin_t) = self.grid_uv8(d);
+        let (nx, ny) = (self.w as i32, self.h as i32 - 1);
+        let i = bin_index8(u.mul(F8::splat(nx as f32)), nx);
+        let j = bin_index8(v.mul(F8::splat(ny as f32)), ny);
+        let cell = F8::gather(&self.cell_pdf, j.mul(I8::splat(nx)).add(i));
+        let pdf = cell.div(F8::splat(2.0 * PI * PI).mul(sin_t));
+        let zero = F8::splat(0.0);
+        (self.lookup8(u, v), sin_t.le(zero).select(zero, pdf))
+    }
+
+    /// [`Self::grid_uv`] of eight lanes.
+    #[inline(always)]
+    fn grid_uv8(&self, d: [F8; 3]) -> (F8, F8, F8) {
+        let l = mul_normalize8(self.to_local, d);
+        let u = math::atan2_8(l[0], l[2].neg())
+            .mul(F8::splat(0.5 / PI))
+            .sub(F8::splat(0.5 / self.w as f32));
+        let y = F8::splat(1.0).min(F8::splat(-1.0).max(l[1]));
+        let v = math::acos8(y).mul(F8::splat(1.0 / PI));
+        let sin_t = l[0].mul(l[0]).add(l[2].mul(l[2])).sqrt();
+        (u.sub(u.floor()), v, sin_t)
+    }
+
+    /// [`Self::lookup`] of eight lanes.
+    #[inline(always)]
+    fn lookup8(&self, u: F8, v: F8) -> [F8; 3] {
+        let (x, y) = (
+            u.mul(F8::splat(self.w as f32)),
+            v.mul(F8::splat((self.h - 1) as f32)),
+        );
+        let (ix, iy) = (
+            bin_index8(x, self.w as i32),
+            bin_index8(y, self.h as i32 - 1),
+        );
+        let (fx, fy) = (x.sub(ix.to_f32()), y.sub(iy.to_f32()));
+        let one = F8::splat(1.0);
+        let (gx, gy) = (one.sub(fx), one.sub(fy));
+        let table = self.data.as_flattened();
+        let base = iy
+            .mul(I8::splat(self.w as i32 + 1))
+            .add(ix)
+            .mul(I8::splat(4));
+        let next_row = I8::splat(4 * (self.w as i32 + 1));
+        std::array::from_fn(|c| {
+            let at = |o: I8| F8::gather(table, base.add(o).add(I8::splat(c as i32)));
+            let a = at(I8::splat(0)).mul(gx).add(at(I8::splat(4)).mul(fx));
+            let b = at(next_row)
+                .mul(gx)
+                .add(at(next_row.add(I8::splat(4))).mul(fx));
+            a.mul(gy).add(b.mul(fy))
+        })
+    }
+}
+
+/// `(m · v).normalize()` of eight vectors `v` (x, y, z), as glam computes
+/// it for a `Vec3A`: the columns of `m` scaled and summed in order, then
+/// divided by the square root of `(x² + y²) + z²`.
+#[inline(always)]
+fn mul_normalize8(m: Mat3, v: [F8; 3]) -> [F8; 3] {
+    let m = m.to_cols_array_2d();
+    let w: [F8; 3] = std::array::from_fn(|r| {
+        let c = |k: usize| F8::splat(m[k][r]).mul(v[k]);
+        c(0).add(c(1)).add(c(2))
+    });
+    let len = w[0]
+        .mul(w[0])
+        .add(w[1].mul(w[1]))
+        .add(w[2].mul(w[2]))
+        .sqrt();
+    w.map(|x| x.div(len))
+}
+
+/// [`bin_index`] of eight lanes, for `x < 2³¹` (NaN and negative lanes give 0).
+#[inline(always)]
+fn bin_index8(x: F8, n: i32) -> I8 {
+    x.trunc().max(I8::splat(0)).min(I8::splat(n - 1))
+}
+
+/// [`guide_pick`] of eight lanes, each with the scalar function's answer:
+/// lane `l` inverts the table of `n + 1` entries at `cdf[first[l]..]` with
+/// its guide's bins at `guide[3·base[l]..]` (one row of the envmap's
+/// conditional tables, or the marginal with `base = first = 0`).
+#[inline(always)]
+fn guide_pick8(guide: &[u32], cdf: &[f32], n: i32, base: I8, first: I8, u: F8) -> (I8, F8) {
+    let g = bin_index8(u.mul(F8::splat(n as f32)), n);
+    let e = base.add(g).mul(I8::splat(3));
+    let one = I8::splat(1);
+    let mut k = I8::gather(guide, e);
+    let mut lo = I8::gather(guide, e.add(one)).to_bits_f32();
+    let mut hi = I8::gather(guide, e.add(I8::splat(2))).to_bits_f32();
+    let (zero, last) = (I8::splat(0), I8::splat(n - 1));
+    let up = last.gt(k).and(hi.le(u));
+    let down = k.gt(zero).and(u.lt(lo));
+    let walk = up.or(down);
+    if walk.bitmask() != 0 {
+        // The lanes whose answer is not the bin's first interval walk to
+        // it in step, each as the scalar walk does.
+        k = k.add(up.to_ones()).sub(down.to_ones());
+        let (mut go_up, mut go_down) = (up, down);
+        loop {
+            let at = first.add(k);
+            go_up = go_up
+                .and(last.gt(k))
+                .and(F8::gather(cdf, at.add(one)).le(u));
+            go_down = go_down.and(k.gt(zero)).and(u.lt(F8::gather(cdf, at)));
+            if go_up.or(go_down).bitmask() == 0 {
+                break;
+            }
+            k = k.add(go_up.to_ones()).sub(go_down.to_ones());
+        }
+        let at = first.add(k);
+        lo = walk.select(F8::gather(cdf, at), lo);
+        hi = walk.select(F8::gather(cdf, at.add(one)), hi);
+    }
+    // `within_interval`.
+    let x = u.sub(lo).div(hi.sub(lo));
+    let x = x.lt(F8::splat(0.0)).select(F8::splat(0.0), x);
+    let top = F8::splat(0.999_999);
+    let x = top.lt(x).select(top, x);
+    (k, lo.lt(hi).select(x, F8::splat(0.5)))
 }
 
 /// Invert a cumulative table `cdf` (`cdf[0] = 0`, last = 1) at `u`: the
@@ -395,5 +600,69 @@ mod tests {
             (mi - mu).abs() < 4.0 * se_u,
             "importance {mi} vs uniform {mu} ± {se_u}"
         );
+    }
+    /// [`Envmap::eval_pdf8`] gives each lane the scalar function's bits, on
+    /// random directions, the poles, the seam and zero components.
+    #[test]
+    fn eval_pdf8_is_eval_pdf() {
+        let e = map();
+        let mut rng = Pcg64::seed_from_u64(23);
+        let special = [
+            Vec3A::Y,
+            -Vec3A::Y,
+            Vec3A::Z,
+            -Vec3A::Z,
+            Vec3A::X,
+            Vec3A::new(0.0, 0.6, -0.8),
+            Vec3A::new(-0.0, -0.6, -0.8),
+            e.to_world * Vec3A::new(1e-8, 1.0, 0.0),
+        ];
+        for round in 0..20_000 {
+            let d: [Vec3A; 8] = if round == 0 {
+                special
+            } else {
+                std::array::from_fn(|_| sample_uniform_sphere([rng.random(), rng.random()]))
+            };
+            let lanes = [0, 1, 2].map(|c| F8::from_array(d.map(|v| v[c])));
+            let (v, pdf) = e.eval_pdf8(lanes);
+            let (v, pdf) = (v.map(F8::to_array), pdf.to_array());
+            for l in 0..8 {
+                let (sv, sp) = e.eval_pdf(d[l]);
+                let wv = Vec3A::new(v[0][l], v[1][l], v[2][l]);
+                let bits = |x: Vec3A| x.to_array().map(f32::to_bits);
+                assert_eq!(bits(wv), bits(sv), "{:?}", d[l]);
+                assert_eq!(pdf[l].to_bits(), sp.to_bits(), "{:?}", d[l]);
+            }
+        }
+    }
+
+    /// The eight lanes give each lane the scalar sample's bits, on random
+    /// variates and at the ends of their range.
+    #[test]
+    fn sample8_is_sample() {
+        let e = map();
+        let mut rng = Pcg64::seed_from_u64(17);
+        for round in 0..20_000 {
+            let mut u0: [f32; 8] = std::array::from_fn(|_| rng.random());
+            let mut u1: [f32; 8] = std::array::from_fn(|_| rng.random());
+            if round % 5 == 0 {
+                (u0[0], u1[1], u0[2], u1[2]) = (0.0, 0.0, 1.0f32.next_down(), 1.0f32.next_down());
+            }
+            let w = e.sample8(F8::from_array(u0), F8::from_array(u1));
+            let ok = w.ok.bitmask();
+            let (d, v) = (w.d.map(F8::to_array), w.value.map(F8::to_array));
+            let pdf = w.pdf.to_array();
+            for l in 0..8 {
+                let s = e.sample([u0[l], u1[l]]);
+                assert_eq!(ok >> l & 1 == 1, s.is_some(), "lane {l}");
+                if let Some((sd, sv, sp)) = s {
+                    let bits = |x: Vec3A| x.to_array().map(f32::to_bits);
+                    let lane = |a: [[f32; 8]; 3]| Vec3A::new(a[0][l], a[1][l], a[2][l]);
+                    assert_eq!(bits(lane(d)), bits(sd), "u = ({}, {})", u0[l], u1[l]);
+                    assert_eq!(bits(lane(v)), bits(sv), "u = ({}, {})", u0[l], u1[l]);
+                    assert_eq!(pdf[l].to_bits(), sp.to_bits());
+                }
+            }
+        }
     }
 }

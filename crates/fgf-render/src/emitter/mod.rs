@@ -77,6 +77,20 @@ pub struct LightSample {
     pub delta: bool,
 }
 
+impl LightSample {
+    /// A sample of an environment map: direction `wi`, radiance `value`.
+    #[inline(always)]
+    pub fn environment(wi: Vec3A, value: Spectrum, pdf: f32) -> LightSample {
+        LightSample {
+            wi,
+            dist: f32::INFINITY,
+            value,
+            pdf,
+            delta: false,
+        }
+    }
+}
+
 /// A textured area emitter's radiance at a hit (out of line: untextured
 /// emitters do not pay for it).
 #[inline(never)]
@@ -308,13 +322,7 @@ impl Emitter {
             }),
             Emitter::Envmap(ref e) => {
                 let (wi, value, pdf) = e.sample(u)?;
-                Some(LightSample {
-                    wi,
-                    dist: f32::INFINITY,
-                    value,
-                    pdf,
-                    delta: false,
-                })
+                Some(LightSample::environment(wi, value, pdf))
             }
         }
     }

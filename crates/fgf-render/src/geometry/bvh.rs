@@ -26,7 +26,7 @@ mod beam;
 
 pub use beam::{Beam, BEAM};
 
-use super::lanes8::F8;
+use crate::lanes::F8;
 use crate::math::bin_index;
 use glam::Vec3A;
 

@@ -13,8 +13,8 @@
 //!
 //! * `types`: hits and primitives;
 //! * `build`: [`Geometry::build`], validation and compilation of the shapes;
-//! * [`bvh`]: the hierarchy; `pack`: the 8-wide leaf test; `lanes8`: its
-//!   8-lane vectors;
+//! * [`bvh`]: the hierarchy; `pack`: the 8-wide leaf test (with the
+//!   8-lane vectors of `crate::lanes`);
 //! * `query`: [`Geometry::intersect`], [`Geometry::intersect2`],
 //!   [`Geometry::for_each_hit`]; `sample`: [`Geometry::sample_shape`];
 //!   `uv`: [`Geometry::uv`], a hit's texture coordinates, computed only
@@ -30,7 +30,6 @@
 mod build;
 pub mod bvh;
 mod frame;
-mod lanes8;
 mod pack;
 mod query;
 mod sample;

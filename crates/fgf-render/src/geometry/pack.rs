@@ -3,8 +3,8 @@
 //! [`super::bvh::PACK`]).
 
 use super::bvh::PACK;
-use super::lanes8::F8;
 use super::types::{Tri, INDEX_MASK, KIND_SHIFT, KIND_TRI, PAD};
+use crate::lanes::F8;
 use crate::ray::Ray;
 
 /// Eight triangles in structure-of-arrays form, intersected at once with

@@ -123,11 +123,18 @@ impl World {
         if self.emitters.is_empty() {
             return None;
         }
+        let (k, u_sel, u) = self.draw_emitter(s);
+        self.emitters[k].sample(&self.geom, p, u_sel, u)
+    }
+
+    /// The draws of [`Self::sample_emitter`], in its order: the emitter
+    /// (uniformly; there must be one), then its two variates.
+    #[inline(always)]
+    pub(super) fn draw_emitter(&self, s: &mut Sampler) -> (usize, f32, [f32; 2]) {
         let n_em = self.emitters.len();
         let k = bin_index(s.next_1d() * n_em as f32, n_em);
         let u_sel = s.next_1d();
-        let u = s.next_2d();
-        self.emitters[k].sample(&self.geom, p, u_sel, u)
+        (k, u_sel, s.next_2d())
     }
 
     /// Next-event estimation from `vertex`: pick and sample a light, and
@@ -143,6 +150,28 @@ impl World {
         s: &mut Sampler,
     ) -> Option<(Spectrum, V::Value, f32)> {
         let ls = self.sample_emitter(vertex.point(), s)?;
+        let (f, scatter_pdf) = vertex.toward(ls.wi)?;
+        let pdf = ls.pdf * self.select_pdf();
+        let tr = self.shadow(&vertex.shadow_origin(ls.wi), ls.wi, ls.dist, s);
+        if tr == Spectrum::ZERO {
+            return None;
+        }
+        let w = if ls.delta {
+            1.0
+        } else {
+            mis_power(pdf, scatter_pdf)
+        };
+        Some((ls.value * tr / pdf, f, w))
+    }
+
+    /// [`Self::direct`] with its light sample `ls` drawn already.
+    #[inline(always)]
+    pub(super) fn direct_from<V: Scatterer>(
+        &self,
+        vertex: &V,
+        ls: LightSample,
+        s: &mut Sampler,
+    ) -> Option<(Spectrum, V::Value, f32)> {
         let (f, scatter_pdf) = vertex.toward(ls.wi)?;
         let pdf = ls.pdf * self.select_pdf();
         let tr = self.shadow(&vertex.shadow_origin(ls.wi), ls.wi, ls.dist, s);

@@ -25,18 +25,29 @@
 //!   routine, [`World::li_direct`] in `direct_lighting.rs`.
 //! * RGB throughput; media sample free flights with spectral MIS (see
 //!   [`crate::medium`]).
+//!
+//! The path is written as stages over a `PathState`, which `li_path` runs
+//! one after another; `World::li_beam` runs them for the camera samples of
+//! a beam in step, so that stages can work on eight paths at once (for now
+//! the light samples of an environment map), with each sample's bits
+//! unchanged (ARCHITECTURE.md, "Rendering").
 
 mod direct;
 mod direct_lighting;
 
 use crate::bsdf::Bsdf;
+use crate::emitter::envmap::Envmap;
+use crate::emitter::{Emitter, LightSample};
+use crate::geometry::bvh::BEAM;
 use crate::geometry::Hit;
+use crate::lanes::F8;
 use crate::math::{bin_index, mis_power, Frame, Sampler};
 use crate::medium::{DistanceEvent, SegmentStart};
 use crate::ray::{offset_point, Ray};
 use crate::spectrum::{max_comp, Spectrum};
-use crate::world::World;
+use crate::world::{ShapeInfo, World};
 use direct::{MediumVertex, SurfaceVertex};
+use glam::Vec3A;
 use std::borrow::Cow;
 
 /// What an earlier query already says about the nearest hit of a ray.
@@ -47,6 +58,74 @@ enum Known<T> {
     /// The ray hits nothing.
     Miss,
     Hit(T),
+}
+
+/// A path between its interactions: what the stages of
+/// [`World::li_path`] carry from one to the next.
+struct PathState {
+    ray: Ray,
+    /// The limit of `ray` (finite only for the camera ray, at `far_clip`).
+    t_max: f32,
+    /// The nearest hit of `ray`, when a previous query already found it.
+    known: Known<Hit>,
+    /// The radiance gathered so far.
+    l: Spectrum,
+    thr: Spectrum,
+    /// The medium `ray` travels in.
+    medium: Option<u32>,
+    depth: u32,
+    /// The path so far is the camera followed by delta interactions only:
+    /// emission found by continuation then counts without MIS.
+    specular: bool,
+    /// The pdf of the last scattering's sample and where it was made.
+    prev_pdf: f32,
+    prev_p: Vec3A,
+    eta: f32,
+    start: SegmentStart,
+    hero: usize,
+    r_u: Spectrum,
+    inv_mis: f32,
+}
+
+/// A surface interaction at which a path scatters, as
+/// [`World::path_advance`] finds it and [`World::path_scatter`] uses it:
+/// the hit, its BSDF made concrete there, and its local frame.
+struct SurfaceStop<'w> {
+    h: Hit,
+    info: ShapeInfo,
+    bsdf: Cow<'w, Bsdf>,
+    frame: Frame,
+    /// The direction toward the previous vertex, in `frame`.
+    wi_local: Vec3A,
+    /// A null-lobe sample here is a crossing, not a scattering event.
+    null_crossings: bool,
+    /// Next-event estimation is made here: its light sample comes first.
+    nee: bool,
+}
+
+/// Where [`World::path_advance`] leaves a path that goes on.
+// (Stops are written in place in fixed arrays and not moved; boxing the
+// large variant would allocate at every surface interaction.)
+#[allow(clippy::large_enum_variant)]
+enum Stop<'w> {
+    /// At a surface interaction, to scatter there.
+    Surface(SurfaceStop<'w>),
+    /// Escaped to the environment map (only for paths in step).
+    Escaped,
+}
+
+/// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
+#[inline(always)]
+fn lanes8(a: &[f32; BEAM], c: usize) -> F8 {
+    F8::from_array(std::array::from_fn(|l| a[(c + l) % BEAM]))
+}
+
+/// The light sample of a surface's next-event estimation.
+enum NeeLight {
+    /// To be drawn from the path's sampler when it is needed.
+    Draw,
+    /// Drawn already, by the sampler's next draws (`None`: the light gave no sample).
+    Drawn(Option<LightSample>),
 }
 
 impl World {
@@ -109,6 +188,131 @@ impl World {
             None => Known::Miss,
         };
         self.li_path(ray, t_max_primary, known, s)
+    }
+
+    /// The scene's only emitter, if it is an environment map and the scene
+    /// has no media: then [`Self::li_beam`] draws the light samples of its
+    /// paths eight at a time.
+    pub(crate) fn lone_envmap(&self) -> Option<&Envmap> {
+        match self.emitters.as_slice() {
+            [Emitter::Envmap(e)] if self.media.is_empty() => Some(e),
+            _ => None,
+        }
+    }
+
+    /// [`Self::li_seen`] of each of the camera samples of a beam (at most
+    /// [`BEAM`]; `rays`, `t_max`, `first` and `s` per sample), written to
+    /// `out`, for a scene lit by the environment map `env` alone, without
+    /// media ([`Self::lone_envmap`]). The paths go on in step, a surface
+    /// interaction each per round, so that the light samples of their
+    /// next-event estimations are drawn together ([`Envmap::sample8`]), and
+    /// the radiance of the environment found by those that escape is looked
+    /// up together ([`Envmap::eval_pdf8`]). Each path draws from its own
+    /// sampler in the order [`Self::li_path`] does, and the lanes give the
+    /// scalar functions' bits: each sample is the one `li_seen` gives.
+    pub(crate) fn li_beam(
+        &self,
+        env: &Envmap,
+        rays: &[Ray],
+        t_max: &[f32],
+        first: &[Option<Hit>],
+        s: &mut [Sampler],
+        out: &mut [Spectrum],
+    ) {
+        debug_assert!(self.takes_first_hit() && self.lone_envmap().is_some());
+        let m = rays.len().min(BEAM);
+        let mut paths: [Option<PathState>; BEAM] = std::array::from_fn(|_| None);
+        for j in 0..m {
+            let known = match first[j] {
+                Some(h) => Known::Hit(h),
+                None => Known::Miss,
+            };
+            paths[j] = self.path_start(rays[j], t_max[j], known, &mut s[j]);
+            out[j] = Spectrum::ZERO;
+        }
+        // Per round: each live path's next stop; the lanes (and variates)
+        // of those whose next-event estimation needs a light sample, with the
+        // samples drawn for them; the lanes of those that escaped.
+        let mut stops: [Option<Stop>; BEAM] = std::array::from_fn(|_| None);
+        let mut need = [0usize; BEAM];
+        let mut u = [[0f32; BEAM]; 2];
+        let mut light: [Option<LightSample>; BEAM] = [None; BEAM];
+        let mut escaped = [0usize; BEAM];
+        let mut dirs = [[0f32; BEAM]; 3];
+        loop {
+            let (mut n_need, mut n_escaped, mut any) = (0, 0, false);
+            for j in 0..m {
+                let Some(st) = &mut paths[j] else { continue };
+                // (Written in place: a stop is some 300 bytes.)
+                stops[j] = self.path_advance::<false>(st, &mut s[j]);
+                match &stops[j] {
+                    None => {
+                        out[j] = st.l;
+                        paths[j] = None;
+                    }
+                    Some(Stop::Escaped) => {
+                        for (c, d) in dirs.iter_mut().enumerate() {
+                            d[n_escaped] = st.ray.d[c];
+                        }
+                        escaped[n_escaped] = j;
+                        n_escaped += 1;
+                    }
+                    Some(Stop::Surface(stop)) => {
+                        any = true;
+                        if stop.nee {
+                            let (_, _, uj) = self.draw_emitter(&mut s[j]);
+                            (u[0][n_need], u[1][n_need]) = (uj[0], uj[1]);
+                            need[n_need] = j;
+                            n_need += 1;
+                        }
+                    }
+                }
+            }
+            // The escaped paths end with the environment's radiance.
+            for c in (0..n_escaped).step_by(8) {
+                let (v, pdf) = env.eval_pdf8(dirs.each_ref().map(|d| lanes8(d, c)));
+                let (v, pdf) = (v.map(F8::to_array), pdf.to_array());
+                for l in 0..(n_escaped - c).min(8) {
+                    let j = escaped[c + l];
+                    if let Some(st) = &mut paths[j] {
+                        self.add_environment(st, Vec3A::new(v[0][l], v[1][l], v[2][l]), pdf[l]);
+                        out[j] = st.l;
+                    }
+                    paths[j] = None;
+                }
+            }
+            if !any {
+                break;
+            }
+            for c in (0..n_need).step_by(8) {
+                let r = env.sample8(lanes8(&u[0], c), lanes8(&u[1], c));
+                let (ok, d, v, p) = (
+                    r.ok.bitmask(),
+                    r.d.map(F8::to_array),
+                    r.value.map(F8::to_array),
+                    r.pdf.to_array(),
+                );
+                for l in 0..(n_need - c).min(8) {
+                    let at = |a: [[f32; 8]; 3]| Vec3A::new(a[0][l], a[1][l], a[2][l]);
+                    light[need[c + l]] =
+                        (ok >> l & 1 == 1).then(|| LightSample::environment(at(d), at(v), p[l]));
+                }
+            }
+            for j in 0..m {
+                let (Some(Stop::Surface(stop)), Some(st)) = (&stops[j], &mut paths[j]) else {
+                    continue;
+                };
+                let nee = if stop.nee {
+                    NeeLight::Drawn(light[j])
+                } else {
+                    NeeLight::Draw
+                };
+                if !self.path_scatter(st, stop, nee, &mut s[j]) {
+                    out[j] = st.l;
+                    paths[j] = None;
+                }
+            }
+        }
     }
 
     /// The path tracer behind [`Self::li`] and [`Self::li_seen`], with
@@ -346,6 +550,311 @@ impl World {
             }
         }
         l
+    }
+
+    /// A path leaving the camera along `ray` (`None`: with `max_depth = 0`
+    /// it carries nothing).
+    #[inline(always)]
+    fn path_start(
+        &self,
+        ray: Ray,
+        t_max_primary: f32,
+        known: Known<Hit>,
+        s: &mut Sampler,
+    ) -> Option<PathState> {
+        if self.max_depth == 0 {
+            return None;
+        }
+        Some(PathState {
+            ray,
+            t_max: t_max_primary,
+            known,
+            l: Spectrum::ZERO,
+            thr: Spectrum::ONE,
+            medium: self.camera_medium,
+            depth: 0,
+            specular: true,
+            prev_pdf: 1.0,
+            prev_p: ray.o,
+            eta: 1.0,
+            start: SegmentStart::Surface,
+            // Path-level spectral MIS (see `Medium::sample_distance_spectral`):
+            // free flights use the hero channel's pdf; `r_u` holds each channel's
+            // path pdf over the hero's, and a contribution is `thr·L / mean(r_u)`.
+            hero: bin_index(s.next_1d() * 3.0, 3),
+            r_u: Spectrum::ONE,
+            inv_mis: 1.0,
+        })
+    }
+
+    /// Follow the path to its next scattering at a surface: through
+    /// media (with their scattering events and next-event estimation),
+    /// null boundaries and emission found on the way. `None` when the
+    /// path ends first; then `st.l` is its radiance.
+    ///
+    /// `ALONE`: the path goes on alone ([`Self::li_path`]). Otherwise it
+    /// goes on in step with others ([`Self::li_beam`]): the scene has no
+    /// media (the code for them is left out), and a path that escapes to
+    /// the environment map stops with [`Stop::Escaped`], before its
+    /// radiance is looked up.
+    #[inline(always)]
+    fn path_advance<'w, const ALONE: bool>(
+        &'w self,
+        st: &mut PathState,
+        s: &mut Sampler,
+    ) -> Option<Stop<'w>> {
+        loop {
+            // Invariant loads from the world are made here, at their use,
+            // not hoisted before the loop: hoisted, they were spilled to the
+            // stack in the prologue of every call (~90 instructions per
+            // sample), while most paths make only a few iterations.
+            let world = std::hint::black_box(self);
+            let ray = st.ray;
+            // `after`: what the query says of the ray continued through `hit`.
+            let (hit, after) = match std::mem::replace(&mut st.known, Known::Unknown) {
+                Known::Hit(h) => (Some(h), Known::Unknown),
+                Known::Miss => (None, Known::Unknown),
+                Known::Unknown if world.any_null => {
+                    let (h1, h2) = world.geom.intersect2(&ray, st.t_max);
+                    let after = match h2 {
+                        Some(r) => Known::Hit(r),
+                        None if st.t_max == f32::INFINITY => Known::Miss,
+                        // No second hit below a finite t_max says nothing
+                        // of what lies beyond it.
+                        None => Known::Unknown,
+                    };
+                    (h1, after)
+                }
+                Known::Unknown => (world.geom.intersect(&ray, st.t_max), Known::Unknown),
+            };
+            let t_surf = hit.map_or(st.t_max, |h| h.t);
+            if let (true, Some(m)) = (ALONE, st.medium) {
+                let med = &world.media[m as usize];
+                let (ds, r) = med.sample_distance_spectral(&ray, t_surf, st.start, st.hero, s);
+                st.thr *= ds.weight;
+                st.r_u *= r;
+                // Only ratios matter: rescale thr and r_u together so that
+                // neither under- nor overflows on long paths.
+                let rm = max_comp(st.r_u);
+                if !(1e-4..=1e4).contains(&rm) && rm > 0.0 {
+                    st.r_u /= rm;
+                    st.thr /= rm;
+                }
+                st.inv_mis = 1.0 / crate::spectrum::mean(st.r_u);
+                if ds.event == DistanceEvent::Scatter {
+                    st.depth += 1;
+                    if st.depth >= world.max_depth || st.thr == Spectrum::ZERO {
+                        return None;
+                    }
+                    let p = ray.at(ds.t);
+                    let phase = med.phase();
+                    // Next-event estimation from the medium vertex, unless
+                    // the medium turns it off (`sample_emitters = false`):
+                    // then phase sampling alone finds the light, and the
+                    // emission it finds counts fully, as after a delta
+                    // interaction (Mitsuba's semantics).
+                    let nee = world.media_sample_emitters[m as usize];
+                    if nee {
+                        let vertex = MediumVertex {
+                            p,
+                            d: ray.d,
+                            phase,
+                            medium: st.medium,
+                        };
+                        if let Some((le, f, w)) = world.direct(&vertex, s) {
+                            st.l += st.thr * le * (f * w * st.inv_mis);
+                        }
+                    }
+                    let (wo, pdf) = phase.sample(ray.d, s.next_2d());
+                    st.prev_pdf = pdf;
+                    st.prev_p = p;
+                    st.specular = !nee;
+                    st.ray = Ray { o: p, d: wo };
+                    st.start = SegmentStart::Medium;
+                    st.t_max = f32::INFINITY;
+                    if !world.roulette(st.depth, &mut st.thr, st.inv_mis, st.eta, s) {
+                        return None;
+                    }
+                    continue;
+                }
+                if st.thr == Spectrum::ZERO {
+                    return None;
+                }
+            }
+            st.t_max = f32::INFINITY;
+            let Some(h) = hit else {
+                // Escaped: the environment, if any.
+                if let Some(e) = world.env {
+                    if !(st.depth == 0 && world.hide_emitters) {
+                        if !ALONE {
+                            return Some(Stop::Escaped);
+                        }
+                        if let Some((radiance, env_pdf)) =
+                            world.emitters[e as usize].environment(ray.d)
+                        {
+                            world.add_environment(st, radiance, env_pdf);
+                        }
+                    }
+                }
+                return None;
+            };
+            let info = world.shapes[h.shape as usize];
+            // Emission of an area light seen from its front side (that of
+            // the shading normal, as in `Emitter::sample`).
+            if let Some(e) = info.emitter {
+                if !(st.depth == 0 && world.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
+                    let em = &world.emitters[e as usize];
+                    if let Some(shape) = em.area_shape() {
+                        let radiance = em.area_radiance(&world.geom, &h);
+                        let w = if st.specular {
+                            1.0
+                        } else {
+                            let d2 = (h.p - st.prev_p).length_squared();
+                            let cos_l = -h.ns.dot(ray.d);
+                            let light_pdf = world.select_pdf() * d2
+                                / (cos_l * world.geom.areas[shape as usize]);
+                            mis_power(st.prev_pdf, light_pdf)
+                        };
+                        st.l += st.thr * radiance * (w * st.inv_mis);
+                    }
+                }
+            }
+            let bsdf = &world.bsdfs[info.bsdf as usize];
+            if bsdf.is_null() {
+                // Index-matched boundary: continue straight on; a new segment starts.
+                st.medium = info.target_medium(h.n, ray.d, st.medium);
+                let o = offset_point(h.p, h.n, ray.d);
+                // The second hit of the query is the continued ray's first,
+                // if it lies ahead of the offset origin (else ask again).
+                st.known = match after {
+                    Known::Unknown => Known::Unknown,
+                    Known::Miss => Known::Miss,
+                    Known::Hit(h2) => {
+                        let h2 = world.geom.make_hit(&ray, h2);
+                        let t = (h2.p - o).dot(ray.d);
+                        if t > 0.0 {
+                            Known::Hit(Hit { t, ..h2 })
+                        } else {
+                            Known::Unknown
+                        }
+                    }
+                };
+                st.ray = Ray { o, d: ray.d };
+                st.start = SegmentStart::Surface;
+                continue;
+            }
+            // This interaction would be event number depth + 1: nothing it
+            // leads to can contribute unless depth + 1 < max_depth (tested
+            // before the BSDF is made concrete at the hit, which a path
+            // ending here does not need). A null-lobe sample may not count
+            // (see `path_scatter`), so its sample is drawn first and the
+            // test made after it.
+            let null_crossings = world.thin_is_crossing && bsdf.has_null_lobe();
+            if st.depth + 1 >= world.max_depth && !null_crossings {
+                return None;
+            }
+            let bsdf = world.bsdf_at(bsdf, &h);
+            let frame = world.frame_at(&bsdf, &h);
+            let wi_local = frame.to_local(-ray.d);
+            // Next-event estimation from the surface, in `path_scatter`.
+            let nee = bsdf.is_smooth() && st.depth + 1 < world.max_depth;
+            return Some(Stop::Surface(SurfaceStop {
+                h,
+                info,
+                bsdf,
+                frame,
+                wi_local,
+                null_crossings,
+                nee,
+            }));
+        }
+    }
+
+    /// Add the radiance `radiance` of the environment, which the path
+    /// escaped to and whose light sampling picks its direction with pdf
+    /// `env_pdf`, weighted against the path's own sample (MIS).
+    #[inline(always)]
+    fn add_environment(&self, st: &mut PathState, radiance: Spectrum, env_pdf: f32) {
+        let w = if st.specular {
+            1.0
+        } else {
+            mis_power(st.prev_pdf, env_pdf * self.select_pdf())
+        };
+        st.l += st.thr * radiance * (w * st.inv_mis);
+    }
+
+    /// Scatter the path at the surface interaction `stop`: next-event
+    /// estimation (with the light sample `light`, if it was drawn
+    /// before), then the BSDF's sample and Russian roulette. `false` when
+    /// the path ends here; then `st.l` is its radiance.
+    #[inline(always)]
+    fn path_scatter(
+        &self,
+        st: &mut PathState,
+        stop: &SurfaceStop<'_>,
+        light: NeeLight,
+        s: &mut Sampler,
+    ) -> bool {
+        let world = self;
+        let &SurfaceStop {
+            ref h,
+            ref info,
+            ref bsdf,
+            ref frame,
+            wi_local,
+            null_crossings,
+            nee,
+        } = stop;
+        let bsdf = &**bsdf;
+        if nee {
+            let vertex = SurfaceVertex {
+                hit: h,
+                info,
+                bsdf,
+                frame,
+                wi_local,
+                medium: st.medium,
+            };
+            let ls = match light {
+                NeeLight::Draw => world.sample_emitter(h.p, s),
+                NeeLight::Drawn(ls) => ls,
+            };
+            if let Some(ls) = ls {
+                if let Some((le, f, w)) = world.direct_from(&vertex, ls, s) {
+                    st.l += st.thr * le * f * (w * st.inv_mis);
+                }
+            }
+        }
+        let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
+            return false;
+        };
+        // A null-lobe sample (thin dielectric transmission, a mask's
+        // transparent part) keeps the direction: under volpath an
+        // index-matched crossing, not a scattering event (Mitsuba's
+        // volpath gives it no depth, and emission found beyond it is
+        // weighted against light sampling from the vertex before, whose
+        // shadow rays pass the surface); under path a bounce, as in
+        // Mitsuba's path.
+        let crossing = null_crossings && bs.null;
+        if !crossing && st.depth + 1 >= world.max_depth {
+            return false;
+        }
+        let wo = frame.to_world(bs.wo);
+        st.thr *= bs.weight;
+        st.eta *= bs.eta;
+        if !crossing {
+            st.depth += 1;
+            st.specular = bs.delta;
+            st.prev_pdf = bs.pdf;
+            st.prev_p = h.p;
+        }
+        st.medium = info.target_medium(h.n, wo, st.medium);
+        st.ray = Ray {
+            o: offset_point(h.p, h.n, wo),
+            d: wo,
+        };
+        st.start = SegmentStart::Surface;
+        st.thr != Spectrum::ZERO && world.roulette(st.depth, &mut st.thr, st.inv_mis, st.eta, s)
     }
 
     /// `thr·inv_mis` is the path weight, the same whichever channel is the
