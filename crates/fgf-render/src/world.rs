@@ -78,6 +78,9 @@ pub struct World {
     /// [`ShapeInfo::partial`]): shadow rays then collect the crossings;
     /// otherwise any hit blocks them ([`crate::geometry::Geometry::occluded`]).
     pub(crate) any_passable: bool,
+    /// Per BSDF of `bsdfs`: [`Bsdf::has_eval8`], whether paths in step
+    /// evaluate it toward their light samples eight at a time.
+    pub(crate) bsdf_eval8: Vec<bool>,
 }
 
 impl World {
@@ -147,6 +150,7 @@ impl World {
         Ok(World {
             any_null,
             any_passable,
+            bsdf_eval8: bsdfs.iter().map(Bsdf::has_eval8).collect(),
             geom,
             shapes,
             bsdfs,

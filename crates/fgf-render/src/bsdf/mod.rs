@@ -29,6 +29,7 @@
 //! One file per family: [`fresnel`], [`microfacet`], [`rough`], [`plastic`];
 //! the dispatch is one `match` on the closed [`BsdfKind`] here.
 
+mod eval8;
 pub mod fresnel;
 pub mod microfacet;
 pub mod plastic;
@@ -37,6 +38,7 @@ pub mod rough;
 #[cfg(test)]
 mod tests;
 
+pub(crate) use eval8::eval_pdf8;
 pub use fresnel::{
     fresnel_conductor, fresnel_conductor_rgb, fresnel_dielectric, FresnelDielectric,
 };

@@ -69,7 +69,7 @@ impl Coated {
 
     /// `ρ/(1 - F_int)` or `ρ/(1 - ρ F_int)` times `η⁻²/π`.
     #[inline]
-    fn base(&self) -> Spectrum {
+    pub(super) fn base(&self) -> Spectrum {
         let denom = if self.nonlinear {
             Spectrum::ONE - self.diffuse * self.f_int
         } else {

@@ -172,7 +172,21 @@ impl World {
         ls: LightSample,
         s: &mut Sampler,
     ) -> Option<(Spectrum, V::Value, f32)> {
-        let (f, scatter_pdf) = vertex.toward(ls.wi)?;
+        self.direct_toward(vertex, ls, vertex.toward(ls.wi), s)
+    }
+
+    /// [`Self::direct_from`] with the vertex's value and pdf toward the
+    /// light sample computed already (`toward`, as [`Scatterer::toward`]
+    /// gives them).
+    #[inline(always)]
+    pub(super) fn direct_toward<V: Scatterer>(
+        &self,
+        vertex: &V,
+        ls: LightSample,
+        toward: Option<(V::Value, f32)>,
+        s: &mut Sampler,
+    ) -> Option<(Spectrum, V::Value, f32)> {
+        let (f, scatter_pdf) = toward?;
         let pdf = ls.pdf * self.select_pdf();
         let tr = self.shadow(&vertex.shadow_origin(ls.wi), ls.wi, ls.dist, s);
         if tr == Spectrum::ZERO {

@@ -35,7 +35,7 @@
 mod direct;
 mod direct_lighting;
 
-use crate::bsdf::Bsdf;
+use crate::bsdf::{eval_pdf8, Bsdf};
 use crate::emitter::envmap::Envmap;
 use crate::emitter::{Emitter, LightSample};
 use crate::geometry::bvh::BEAM;
@@ -114,6 +114,10 @@ enum Stop<'w> {
     Escaped,
 }
 
+/// The fewest paths at one BSDF whose values toward their light samples
+/// are computed together ([`eval_pdf8`]); fewer are computed one by one.
+const EVAL8_LANES_MIN: usize = 3;
+
 /// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
 #[inline(always)]
 fn lanes8(a: &[f32; BEAM], c: usize) -> F8 {
@@ -126,6 +130,9 @@ enum NeeLight {
     Draw,
     /// Drawn already, by the sampler's next draws (`None`: the light gave no sample).
     Drawn(Option<LightSample>),
+    /// Drawn already, with the BSDF's value and pdf toward it evaluated
+    /// (`None` where the value is zero).
+    Evaluated(LightSample, Option<(Spectrum, f32)>),
 }
 
 impl World {
@@ -235,6 +242,7 @@ impl World {
         // samples drawn for them; the lanes of those that escaped.
         let mut stops: [Option<Stop>; BEAM] = std::array::from_fn(|_| None);
         let mut need = [0usize; BEAM];
+        let mut need_bsdf = [0u32; BEAM];
         let mut u = [[0f32; BEAM]; 2];
         let mut light: [Option<LightSample>; BEAM] = [None; BEAM];
         let mut escaped = [0usize; BEAM];
@@ -263,6 +271,7 @@ impl World {
                             let (_, _, uj) = self.draw_emitter(&mut s[j]);
                             (u[0][n_need], u[1][n_need]) = (uj[0], uj[1]);
                             need[n_need] = j;
+                            need_bsdf[n_need] = stop.info.bsdf;
                             n_need += 1;
                         }
                     }
@@ -298,14 +307,61 @@ impl World {
                         (ok >> l & 1 == 1).then(|| LightSample::environment(at(d), at(v), p[l]));
                 }
             }
+            // The BSDFs' values toward the light samples, eight lanes at
+            // a time for paths at the same scene BSDF where it has an
+            // 8-lane evaluation (`evaluated`: the paths that have them).
+            let mut todo = 0u32;
+            for a in 0..n_need {
+                if light[need[a]].is_some() && self.bsdf_eval8[need_bsdf[a] as usize] {
+                    todo |= 1 << a;
+                }
+            }
+            let (mut evaluated, mut tf, mut tp) = (0u32, [Spectrum::ZERO; BEAM], [0f32; BEAM]);
+            while todo != 0 {
+                // The first path left and the next ones at its BSDF, up to eight.
+                let id = need_bsdf[todo.trailing_zeros() as usize];
+                let (mut lanes, mut n, mut rest) = ([0usize; 8], 0, todo);
+                while rest != 0 && n < 8 {
+                    let a = rest.trailing_zeros() as usize;
+                    rest &= rest - 1;
+                    if need_bsdf[a] == id {
+                        lanes[n] = need[a];
+                        n += 1;
+                        todo &= !(1 << a);
+                    }
+                }
+                if n < EVAL8_LANES_MIN {
+                    continue;
+                }
+                let stop_of = |j: usize| match &stops[j] {
+                    Some(Stop::Surface(s)) => s,
+                    _ => unreachable!("lanes at a surface"),
+                };
+                let last = lanes[n - 1];
+                let lanes: [usize; 8] =
+                    std::array::from_fn(|k| if k < n { lanes[k] } else { last });
+                let bsdfs: [&Bsdf; 8] = lanes.map(|j| &*stop_of(j).bsdf);
+                let wi = lanes.map(|j| stop_of(j).wi_local);
+                let wo = lanes.map(|j| match &light[j] {
+                    Some(ls) => stop_of(j).frame.to_local(ls.wi),
+                    None => unreachable!("lanes with a light sample"),
+                });
+                let (f, pdf) = eval_pdf8(&bsdfs[..n], wi, wo);
+                for k in 0..n {
+                    (tf[lanes[k]], tp[lanes[k]]) = (f[k], pdf[k]);
+                    evaluated |= 1 << lanes[k];
+                }
+            }
             for j in 0..m {
                 let (Some(Stop::Surface(stop)), Some(st)) = (&stops[j], &mut paths[j]) else {
                     continue;
                 };
-                let nee = if stop.nee {
-                    NeeLight::Drawn(light[j])
-                } else {
-                    NeeLight::Draw
+                let nee = match light[j] {
+                    _ if !stop.nee => NeeLight::Draw,
+                    Some(ls) if evaluated >> j & 1 != 0 => {
+                        NeeLight::Evaluated(ls, (tf[j] != Spectrum::ZERO).then_some((tf[j], tp[j])))
+                    }
+                    ls => NeeLight::Drawn(ls),
                 };
                 if !self.path_scatter(st, stop, nee, &mut s[j]) {
                     out[j] = st.l;
@@ -815,14 +871,15 @@ impl World {
                 wi_local,
                 medium: st.medium,
             };
-            let ls = match light {
-                NeeLight::Draw => world.sample_emitter(h.p, s),
-                NeeLight::Drawn(ls) => ls,
+            let direct = match light {
+                NeeLight::Draw => world
+                    .sample_emitter(h.p, s)
+                    .and_then(|ls| world.direct_from(&vertex, ls, s)),
+                NeeLight::Drawn(ls) => ls.and_then(|ls| world.direct_from(&vertex, ls, s)),
+                NeeLight::Evaluated(ls, toward) => world.direct_toward(&vertex, ls, toward, s),
             };
-            if let Some(ls) = ls {
-                if let Some((le, f, w)) = world.direct_from(&vertex, ls, s) {
-                    st.l += st.thr * le * f * (w * st.inv_mis);
-                }
+            if let Some((le, f, w)) = direct {
+                st.l += st.thr * le * f * (w * st.inv_mis);
             }
         }
         let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
