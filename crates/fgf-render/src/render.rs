@@ -368,7 +368,9 @@ mod tests {
 
     /// The paths of a beam in step (a scene lit by an environment map
     /// alone) give each sample the bits of the paths traced one at a time:
-    /// a textured rough-plastic height field, a rough conductor, and a
+    /// a textured rough-plastic height field, a rough conductor and a
+    /// two-sided rough plastic seen from both sides (all GGX: their values
+    /// toward light samples and sampled directions in eight lanes), and a
     /// smooth conductor and a dielectric sphere (no next-event estimation
     /// there), under an environment map with a bright spot; full beams of
     /// 16 and the beams of 5, 3 and 7 of split sample ranges. With a
@@ -392,7 +394,9 @@ mod tests {
                 <transform name="to_world">
                     <rotate x="1" angle="-90"/><translate value="2, -0.05, 2"/><scale value="3"/>
                 </transform>
-                <bsdf type="roughconductor"><float name="alpha" value="0.3"/></bsdf>
+                <bsdf type="roughconductor">
+                    <string name="distribution" value="ggx"/><float name="alpha" value="0.3"/>
+                </bsdf>
             </shape>
             <shape type="disk">
                 <transform name="to_world"><translate value="-9, -9, -9"/></transform>
@@ -400,7 +404,7 @@ mod tests {
                     <texture type="checkerboard" name="diffuse_reflectance">
                         <transform name="to_uv"><scale x="12" y="12"/></transform>
                     </texture>
-                    <float name="alpha" value="0.15"/>
+                    <string name="distribution" value="ggx"/><float name="alpha" value="0.15"/>
                 </bsdf>
             </shape>
             <shape type="sphere">
@@ -410,6 +414,16 @@ mod tests {
             <shape type="sphere">
                 <point name="center" x="2.7" y="0.5" z="1.6"/><float name="radius" value="0.35"/>
                 <bsdf type="conductor"/>
+            </shape>
+            <shape type="rectangle">
+                <transform name="to_world">
+                    <scale x="0.6" y="0.4"/><rotate y="1" angle="20"/><translate value="2.3, 0.45, 2.6"/>
+                </transform>
+                <bsdf type="twosided">
+                    <bsdf type="roughplastic">
+                        <string name="distribution" value="ggx"/><float name="alpha" value="0.25"/>
+                    </bsdf>
+                </bsdf>
             </shape>
         </scene>"#;
         let mut desc = with_height_field(xml, 48);

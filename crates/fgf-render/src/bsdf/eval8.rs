@@ -67,6 +67,34 @@ impl Bsdf {
     }
 }
 
+impl Bsdf {
+    /// For a BSDF for which [`Bsdf::has_eval8`] holds (made concrete at a
+    /// hit): the direction [`Bsdf::sample`] draws with these variates, as
+    /// `(wi, wo, flipped)` in the frame where it samples (`wi.z > 0`;
+    /// `flipped` for the back side of a two-sided BSDF, whose sample is
+    /// `wo` with its `z` negated); its sample is then
+    /// [`super::BsdfSample::glossy`] of [`eval_pdf8`] at `(wi, wo)`. `None`
+    /// where `sample` gives none before evaluating the BSDF.
+    #[inline]
+    pub(crate) fn sample_wo8(
+        &self,
+        mut wi: Vec3A,
+        u1: f32,
+        u2: [f32; 2],
+    ) -> Option<(Vec3A, Vec3A, bool)> {
+        let flipped = self.twosided && wi.z < 0.0;
+        if flipped {
+            wi.z = -wi.z;
+        }
+        let wo = match &self.kind {
+            BsdfKind::RoughConductor(c) => c.sample_wo(wi, u2),
+            BsdfKind::RoughPlastic(p) => p.sample_wo(wi, u1, u2),
+            _ => unreachable!("sample_wo8 of a BSDF without has_eval8"),
+        }?;
+        Some((wi, wo, flipped))
+    }
+}
+
 /// [`Bsdf::eval_pdf`] of lane `l` of `bsdfs` at `(wi[l], wo[l])` (local
 /// directions), for lanes that are instances of one scene BSDF for which
 /// [`Bsdf::has_eval8`] holds ([`Bsdf::at`] of it at each lane's hit; lanes

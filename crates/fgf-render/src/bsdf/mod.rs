@@ -142,6 +142,22 @@ pub struct BsdfSample {
     pub null: bool,
 }
 
+impl BsdfSample {
+    /// The sample of a non-delta reflection toward `wo`, where the BSDF's
+    /// value is `f` and its pdf `pdf` (`None` unless `pdf > 0`).
+    #[inline]
+    pub(crate) fn glossy(wo: Vec3A, f: Spectrum, pdf: f32) -> Option<BsdfSample> {
+        (pdf > 0.0).then(|| BsdfSample {
+            wo,
+            weight: f / pdf,
+            pdf,
+            delta: false,
+            eta: 1.0,
+            null: false,
+        })
+    }
+}
+
 impl Bsdf {
     pub fn from_desc(d: &BsdfDesc) -> Bsdf {
         let c = crate::spectrum::from_rgb;

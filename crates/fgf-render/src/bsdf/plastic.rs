@@ -361,6 +361,15 @@ impl RoughPlastic {
     }
 
     pub fn sample(&self, wi: Vec3A, u1: f32, u: [f32; 2]) -> Option<BsdfSample> {
+        let wo = self.sample_wo(wi, u1, u)?;
+        let (f, pdf) = self.eval_pdf(wi, wo);
+        BsdfSample::glossy(wo, f, pdf)
+    }
+
+    /// The direction of [`Self::sample`] (`None` where it gives none
+    /// before evaluating the BSDF there).
+    #[inline]
+    pub fn sample_wo(&self, wi: Vec3A, u1: f32, u: [f32; 2]) -> Option<Vec3A> {
         if wi.z <= 0.0 {
             return None;
         }
@@ -370,18 +379,7 @@ impl RoughPlastic {
         } else {
             sample_cosine_hemisphere(u)
         };
-        if wo.z <= 0.0 {
-            return None;
-        }
-        let (f, pdf) = self.eval_pdf(wi, wo);
-        (pdf > 0.0).then(|| BsdfSample {
-            wo,
-            weight: f / pdf,
-            pdf,
-            delta: false,
-            eta: 1.0,
-            null: false,
-        })
+        (wo.z > 0.0).then_some(wo)
     }
 }
 

@@ -35,7 +35,7 @@
 mod direct;
 mod direct_lighting;
 
-use crate::bsdf::{eval_pdf8, Bsdf};
+use crate::bsdf::{eval_pdf8, Bsdf, BsdfSample};
 use crate::emitter::envmap::Envmap;
 use crate::emitter::{Emitter, LightSample};
 use crate::geometry::bvh::BEAM;
@@ -117,6 +117,33 @@ enum Stop<'w> {
 /// The fewest paths at one BSDF whose values toward their light samples
 /// are computed together ([`eval_pdf8`]); fewer are computed one by one.
 const EVAL8_LANES_MIN: usize = 3;
+
+/// Calls `f(lanes, n)` with the paths of `todo` (a mask of lanes) in
+/// groups at one scene BSDF (`bsdf_id`), in lane order, up to eight at a
+/// time: the `n` lanes of the group, then its last repeated to fill
+/// eight. Groups of fewer than [`EVAL8_LANES_MIN`] are left out.
+#[inline(always)]
+fn groups8(mut todo: u32, bsdf_id: &[u32; BEAM], mut f: impl FnMut([usize; 8], usize)) {
+    while todo != 0 {
+        let id = bsdf_id[todo.trailing_zeros() as usize];
+        let (mut lanes, mut n, mut rest) = ([0usize; 8], 0, todo);
+        while rest != 0 && n < 8 {
+            let j = rest.trailing_zeros() as usize;
+            rest &= rest - 1;
+            if bsdf_id[j] == id {
+                lanes[n] = j;
+                n += 1;
+                todo &= !(1 << j);
+            }
+        }
+        if n >= EVAL8_LANES_MIN {
+            for k in n..8 {
+                lanes[k] = lanes[n - 1];
+            }
+            f(lanes, n);
+        }
+    }
+}
 
 /// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
 #[inline(always)]
@@ -242,7 +269,8 @@ impl World {
         // samples drawn for them; the lanes of those that escaped.
         let mut stops: [Option<Stop>; BEAM] = std::array::from_fn(|_| None);
         let mut need = [0usize; BEAM];
-        let mut need_bsdf = [0u32; BEAM];
+        // The scene BSDF of each path at a surface.
+        let mut bsdf_id = [0u32; BEAM];
         let mut u = [[0f32; BEAM]; 2];
         let mut light: [Option<LightSample>; BEAM] = [None; BEAM];
         let mut escaped = [0usize; BEAM];
@@ -267,11 +295,11 @@ impl World {
                     }
                     Some(Stop::Surface(stop)) => {
                         any = true;
+                        bsdf_id[j] = stop.info.bsdf;
                         if stop.nee {
                             let (_, _, uj) = self.draw_emitter(&mut s[j]);
                             (u[0][n_need], u[1][n_need]) = (uj[0], uj[1]);
                             need[n_need] = j;
-                            need_bsdf[n_need] = stop.info.bsdf;
                             n_need += 1;
                         }
                     }
@@ -307,50 +335,78 @@ impl World {
                         (ok >> l & 1 == 1).then(|| LightSample::environment(at(d), at(v), p[l]));
                 }
             }
-            // The BSDFs' values toward the light samples, eight lanes at
-            // a time for paths at the same scene BSDF where it has an
-            // 8-lane evaluation (`evaluated`: the paths that have them).
+            let stop_of = |j: usize| match &stops[j] {
+                Some(Stop::Surface(s)) => s,
+                _ => unreachable!("a path at a surface"),
+            };
+            // The BSDFs' values toward the light samples, eight paths at a
+            // time at the same scene BSDF where it has an 8-lane
+            // evaluation (`evaluated`: the paths that have them).
             let mut todo = 0u32;
-            for a in 0..n_need {
-                if light[need[a]].is_some() && self.bsdf_eval8[need_bsdf[a] as usize] {
-                    todo |= 1 << a;
+            for &j in &need[..n_need] {
+                if light[j].is_some() && self.bsdf_eval8[bsdf_id[j] as usize] {
+                    todo |= 1 << j;
                 }
             }
             let (mut evaluated, mut tf, mut tp) = (0u32, [Spectrum::ZERO; BEAM], [0f32; BEAM]);
-            while todo != 0 {
-                // The first path left and the next ones at its BSDF, up to eight.
-                let id = need_bsdf[todo.trailing_zeros() as usize];
-                let (mut lanes, mut n, mut rest) = ([0usize; 8], 0, todo);
-                while rest != 0 && n < 8 {
-                    let a = rest.trailing_zeros() as usize;
-                    rest &= rest - 1;
-                    if need_bsdf[a] == id {
-                        lanes[n] = need[a];
-                        n += 1;
-                        todo &= !(1 << a);
-                    }
-                }
-                if n < EVAL8_LANES_MIN {
-                    continue;
-                }
-                let stop_of = |j: usize| match &stops[j] {
-                    Some(Stop::Surface(s)) => s,
-                    _ => unreachable!("lanes at a surface"),
-                };
-                let last = lanes[n - 1];
-                let lanes: [usize; 8] =
-                    std::array::from_fn(|k| if k < n { lanes[k] } else { last });
-                let bsdfs: [&Bsdf; 8] = lanes.map(|j| &*stop_of(j).bsdf);
+            groups8(todo, &bsdf_id, |lanes, n| {
                 let wi = lanes.map(|j| stop_of(j).wi_local);
                 let wo = lanes.map(|j| match &light[j] {
                     Some(ls) => stop_of(j).frame.to_local(ls.wi),
-                    None => unreachable!("lanes with a light sample"),
+                    None => unreachable!("a path with a light sample"),
                 });
-                let (f, pdf) = eval_pdf8(&bsdfs[..n], wi, wo);
+                let (f, pdf) = eval_pdf8(&lanes.map(|j| &*stop_of(j).bsdf)[..n], wi, wo);
                 for k in 0..n {
                     (tf[lanes[k]], tp[lanes[k]]) = (f[k], pdf[k]);
                     evaluated |= 1 << lanes[k];
                 }
+            });
+            // The BSDF samples of the paths at such BSDFs: their variates
+            // drawn now (the shadow rays, traced before in `li_path`'s
+            // order, draw none in scenes without media), each direction
+            // sampled alone and the values there eight at a time
+            // (`sampled`: the paths whose sample is made here).
+            let (mut sampled, mut todo) = (0u32, 0u32);
+            let mut bs: [Option<BsdfSample>; BEAM] = [None; BEAM];
+            let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); BEAM];
+            let mut us = [(0f32, [0f32; 2]); BEAM];
+            for j in 0..m {
+                let (Some(Stop::Surface(stop)), Some(_)) = (&stops[j], &paths[j]) else {
+                    continue;
+                };
+                if !self.bsdf_eval8[bsdf_id[j] as usize] {
+                    continue;
+                }
+                us[j] = (s[j].next_1d(), s[j].next_2d());
+                sampled |= 1 << j;
+                if let Some(d) = stop.bsdf.sample_wo8(stop.wi_local, us[j].0, us[j].1) {
+                    sdir[j] = d;
+                    todo |= 1 << j;
+                }
+            }
+            let mut alone = todo;
+            groups8(todo, &bsdf_id, |lanes, n| {
+                let (f, pdf) = eval_pdf8(
+                    &lanes.map(|j| &*stop_of(j).bsdf)[..n],
+                    lanes.map(|j| sdir[j].0),
+                    lanes.map(|j| sdir[j].1),
+                );
+                for k in 0..n {
+                    let (j, (_, wo, flipped)) = (lanes[k], sdir[lanes[k]]);
+                    bs[j] = BsdfSample::glossy(wo, f[k], pdf[k]).map(|mut b| {
+                        if flipped {
+                            b.wo.z = -b.wo.z;
+                        }
+                        b
+                    });
+                    alone &= !(1 << j);
+                }
+            });
+            while alone != 0 {
+                let j = alone.trailing_zeros() as usize;
+                alone &= alone - 1;
+                let stop = stop_of(j);
+                bs[j] = stop.bsdf.sample(stop.wi_local, us[j].0, us[j].1);
             }
             for j in 0..m {
                 let (Some(Stop::Surface(stop)), Some(st)) = (&stops[j], &mut paths[j]) else {
@@ -363,7 +419,8 @@ impl World {
                     }
                     ls => NeeLight::Drawn(ls),
                 };
-                if !self.path_scatter(st, stop, nee, &mut s[j]) {
+                let sample = (sampled >> j & 1 != 0).then_some(bs[j]);
+                if !self.path_scatter(st, stop, nee, sample, &mut s[j]) {
                     out[j] = st.l;
                     paths[j] = None;
                 }
@@ -849,6 +906,7 @@ impl World {
         st: &mut PathState,
         stop: &SurfaceStop<'_>,
         light: NeeLight,
+        sample: Option<Option<BsdfSample>>,
         s: &mut Sampler,
     ) -> bool {
         let world = self;
@@ -882,7 +940,11 @@ impl World {
                 st.l += st.thr * le * f * (w * st.inv_mis);
             }
         }
-        let Some(bs) = bsdf.sample(wi_local, s.next_1d(), s.next_2d()) else {
+        let bs = match sample {
+            Some(bs) => bs,
+            None => bsdf.sample(wi_local, s.next_1d(), s.next_2d()),
+        };
+        let Some(bs) = bs else {
             return false;
         };
         // A null-lobe sample (thin dielectric transmission, a mask's
