@@ -63,7 +63,10 @@ pub struct Prepared {
     beams: bool,
     /// The paths of a beam go on in step where the scene is lit by an
     /// environment map alone ([`World::li_beam`]); off, each alone (the
-    /// reference the tests compare with).
+    /// reference the tests compare with). On by default where the 8-lane
+    /// kernels are vector instructions ([`crate::lanes`]); the portable
+    /// build, where they are written out lane by lane, keeps each path
+    /// alone (the same image either way).
     lockstep: bool,
     /// The scene's `sample_count`.
     pub spp: u32,
@@ -80,7 +83,7 @@ impl Prepared {
         let (width, height) = (world.camera.width as usize, world.camera.height as usize);
         Ok(Prepared {
             beams: world.takes_first_hit(),
-            lockstep: true,
+            lockstep: cfg!(all(target_arch = "x86_64", target_feature = "avx2")),
             world,
             filter: Filter::new(&scene.sensor.rfilter),
             spp: scene.sensor.spp,
@@ -451,7 +454,9 @@ mod tests {
             }),
             to_world: Mat4::from_rotation_y(0.4),
         }];
-        let in_step = Prepared::new(&desc).unwrap();
+        let mut in_step = Prepared::new(&desc).unwrap();
+        // (Also in the portable build, whose lanes are written out.)
+        in_step.lockstep = true;
         assert!(in_step.beams && in_step.world.lone_envmap().is_some());
         let mut alone = Prepared::new(&desc).unwrap();
         alone.lockstep = false;
