@@ -150,18 +150,7 @@ impl World {
         s: &mut Sampler,
     ) -> Option<(Spectrum, V::Value, f32)> {
         let ls = self.sample_emitter(vertex.point(), s)?;
-        let (f, scatter_pdf) = vertex.toward(ls.wi)?;
-        let pdf = ls.pdf * self.select_pdf();
-        let tr = self.shadow(&vertex.shadow_origin(ls.wi), ls.wi, ls.dist, s);
-        if tr == Spectrum::ZERO {
-            return None;
-        }
-        let w = if ls.delta {
-            1.0
-        } else {
-            mis_power(pdf, scatter_pdf)
-        };
-        Some((ls.value * tr / pdf, f, w))
+        self.direct_from(vertex, ls, s)
     }
 
     /// [`Self::direct`] with its light sample `ls` drawn already.

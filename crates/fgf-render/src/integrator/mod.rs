@@ -61,7 +61,7 @@ enum Known<T> {
 }
 
 /// A path between its interactions: what the stages of
-/// [`World::li_path`] carry from one to the next.
+/// [`World::li_beam`] carry from one to the next.
 struct PathState {
     ray: Ray,
     /// The limit of `ray` (finite only for the camera ray, at `far_clip`).
@@ -82,8 +82,7 @@ struct PathState {
     prev_p: Vec3A,
     eta: f32,
     start: SegmentStart,
-    hero: usize,
-    r_u: Spectrum,
+    /// `1 / mean(r_u)` of [`World::li_path`]'s spectral MIS: 1 without media.
     inv_mis: f32,
 }
 
@@ -280,7 +279,7 @@ impl World {
             for j in 0..m {
                 let Some(st) = &mut paths[j] else { continue };
                 // (Written in place: a stop is some 300 bytes.)
-                stops[j] = self.path_advance::<false>(st, &mut s[j]);
+                stops[j] = self.path_advance(st);
                 match &stops[j] {
                     None => {
                         out[j] = st.l;
@@ -678,6 +677,9 @@ impl World {
         if self.max_depth == 0 {
             return None;
         }
+        // `li_path` first draws the hero channel of its spectral MIS, which
+        // only media use: drawn here too, so that the streams stay in step.
+        s.next_1d();
         Some(PathState {
             ray,
             t_max: t_max_primary,
@@ -691,31 +693,18 @@ impl World {
             prev_p: ray.o,
             eta: 1.0,
             start: SegmentStart::Surface,
-            // Path-level spectral MIS (see `Medium::sample_distance_spectral`):
-            // free flights use the hero channel's pdf; `r_u` holds each channel's
-            // path pdf over the hero's, and a contribution is `thr·L / mean(r_u)`.
-            hero: bin_index(s.next_1d() * 3.0, 3),
-            r_u: Spectrum::ONE,
             inv_mis: 1.0,
         })
     }
 
-    /// Follow the path to its next scattering at a surface: through
-    /// media (with their scattering events and next-event estimation),
-    /// null boundaries and emission found on the way. `None` when the
-    /// path ends first; then `st.l` is its radiance.
-    ///
-    /// `ALONE`: the path goes on alone ([`Self::li_path`]). Otherwise it
-    /// goes on in step with others ([`Self::li_beam`]): the scene has no
-    /// media (the code for them is left out), and a path that escapes to
-    /// the environment map stops with [`Stop::Escaped`], before its
-    /// radiance is looked up.
+    /// Follow a path of [`Self::li_beam`] (a scene without media) to its
+    /// next scattering at a surface: through null boundaries and emission
+    /// found on the way. `None` when the path ends first; then `st.l` is
+    /// its radiance. A path that escapes to the environment map stops with
+    /// [`Stop::Escaped`], before its radiance is looked up. (The same
+    /// steps as [`Self::li_path`]'s, which also has the media's.)
     #[inline(always)]
-    fn path_advance<'w, const ALONE: bool>(
-        &'w self,
-        st: &mut PathState,
-        s: &mut Sampler,
-    ) -> Option<Stop<'w>> {
+    fn path_advance<'w>(&'w self, st: &mut PathState) -> Option<Stop<'w>> {
         loop {
             // Invariant loads from the world are made here, at their use,
             // not hoisted before the loop: hoisted, they were spilled to the
@@ -740,74 +729,11 @@ impl World {
                 }
                 Known::Unknown => (world.geom.intersect(&ray, st.t_max), Known::Unknown),
             };
-            let t_surf = hit.map_or(st.t_max, |h| h.t);
-            if let (true, Some(m)) = (ALONE, st.medium) {
-                let med = &world.media[m as usize];
-                let (ds, r) = med.sample_distance_spectral(&ray, t_surf, st.start, st.hero, s);
-                st.thr *= ds.weight;
-                st.r_u *= r;
-                // Only ratios matter: rescale thr and r_u together so that
-                // neither under- nor overflows on long paths.
-                let rm = max_comp(st.r_u);
-                if !(1e-4..=1e4).contains(&rm) && rm > 0.0 {
-                    st.r_u /= rm;
-                    st.thr /= rm;
-                }
-                st.inv_mis = 1.0 / crate::spectrum::mean(st.r_u);
-                if ds.event == DistanceEvent::Scatter {
-                    st.depth += 1;
-                    if st.depth >= world.max_depth || st.thr == Spectrum::ZERO {
-                        return None;
-                    }
-                    let p = ray.at(ds.t);
-                    let phase = med.phase();
-                    // Next-event estimation from the medium vertex, unless
-                    // the medium turns it off (`sample_emitters = false`):
-                    // then phase sampling alone finds the light, and the
-                    // emission it finds counts fully, as after a delta
-                    // interaction (Mitsuba's semantics).
-                    let nee = world.media_sample_emitters[m as usize];
-                    if nee {
-                        let vertex = MediumVertex {
-                            p,
-                            d: ray.d,
-                            phase,
-                            medium: st.medium,
-                        };
-                        if let Some((le, f, w)) = world.direct(&vertex, s) {
-                            st.l += st.thr * le * (f * w * st.inv_mis);
-                        }
-                    }
-                    let (wo, pdf) = phase.sample(ray.d, s.next_2d());
-                    st.prev_pdf = pdf;
-                    st.prev_p = p;
-                    st.specular = !nee;
-                    st.ray = Ray { o: p, d: wo };
-                    st.start = SegmentStart::Medium;
-                    st.t_max = f32::INFINITY;
-                    if !world.roulette(st.depth, &mut st.thr, st.inv_mis, st.eta, s) {
-                        return None;
-                    }
-                    continue;
-                }
-                if st.thr == Spectrum::ZERO {
-                    return None;
-                }
-            }
             st.t_max = f32::INFINITY;
             let Some(h) = hit else {
                 // Escaped: the environment, if any.
-                if let Some(e) = world.env {
-                    if !(st.depth == 0 && world.hide_emitters) {
-                        if !ALONE {
-                            return Some(Stop::Escaped);
-                        }
-                        if let Some((radiance, env_pdf)) =
-                            world.emitters[e as usize].environment(ray.d)
-                        {
-                            world.add_environment(st, radiance, env_pdf);
-                        }
-                    }
+                if world.env.is_some() && !(st.depth == 0 && world.hide_emitters) {
+                    return Some(Stop::Escaped);
                 }
                 return None;
             };
