@@ -1,8 +1,9 @@
 //! [`Bsdf::eval_pdf`] of eight directions at once, for the paths that go on
-//! in step ([`crate::world::World`]'s `li_beam`): the value and pdf toward
-//! the light samples of up to eight surface interactions with the same
-//! scene BSDF, for the models that take most of a glossy scene's
-//! next-event estimations, `roughconductor` and `roughplastic` on GGX.
+//! in step ([`crate::world::World`]'s `li_beam`): the value and pdf of the
+//! BSDF of up to eight surface interactions at the same scene BSDF, toward
+//! their light samples and at the directions their BSDF samples draw, for
+//! the models that take most of a glossy scene's shading,
+//! `roughconductor` and `roughplastic` on GGX.
 //!
 //! Each lane performs the scalar code's operations in its order (see
 //! [`crate::lanes`]), so it gives the bits of [`Bsdf::eval_pdf`]: the
@@ -21,7 +22,7 @@ use glam::Vec3A;
 use std::f32::consts::PI;
 
 /// Eight 3-vectors (or spectra), one per lane: x, y, z.
-pub(crate) type V8 = [F8; 3];
+type V8 = [F8; 3];
 
 #[inline(always)]
 fn dot8(a: V8, b: V8) -> F8 {
@@ -65,9 +66,7 @@ impl Bsdf {
             .flat_map(|t| t.iter())
             .all(|(p, _)| per_lane.contains(p))
     }
-}
 
-impl Bsdf {
     /// For a BSDF for which [`Bsdf::has_eval8`] holds (made concrete at a
     /// hit): the direction [`Bsdf::sample`] draws with these variates, as
     /// `(wi, wo, flipped)` in the frame where it samples (`wi.z > 0`;

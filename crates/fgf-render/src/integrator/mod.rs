@@ -26,10 +26,12 @@
 //! * RGB throughput; media sample free flights with spectral MIS (see
 //!   [`crate::medium`]).
 //!
-//! The path is written as stages over a `PathState`, which `li_path` runs
-//! one after another; `World::li_beam` runs them for the camera samples of
-//! a beam in step, so that stages can work on eight paths at once (for now
-//! the light samples of an environment map), with each sample's bits
+//! `li_path` traces one path from start to end and is the reference. In
+//! scenes lit by an environment map alone and without media,
+//! `World::li_beam` runs the camera samples of a beam in step, as stages
+//! over a `PathState`, so that some stages work on eight paths at once (the
+//! light samples, the environment's radiance, and the values of GGX
+//! `roughconductor` and `roughplastic` BSDFs), with each sample's bits
 //! unchanged (ARCHITECTURE.md, "Rendering").
 
 mod direct;
@@ -113,8 +115,10 @@ enum Stop<'w> {
     Escaped,
 }
 
-/// The fewest paths at one BSDF whose values toward their light samples
-/// are computed together ([`eval_pdf8`]); fewer are computed one by one.
+/// The fewest paths at one BSDF whose values (toward their light samples,
+/// at their sampled directions) are computed together ([`eval_pdf8`]);
+/// fewer are computed one by one. (By instructions an 8-lane evaluation
+/// costs about three scalar ones; docs/benchmarks.md.)
 const EVAL8_LANES_MIN: usize = 3;
 
 /// Calls `f(lanes, n)` with the paths of `todo` (a mask of lanes) in
@@ -238,9 +242,12 @@ impl World {
     /// `out`, for a scene lit by the environment map `env` alone, without
     /// media ([`Self::lone_envmap`]). The paths go on in step, a surface
     /// interaction each per round, so that the light samples of their
-    /// next-event estimations are drawn together ([`Envmap::sample8`]), and
-    /// the radiance of the environment found by those that escape is looked
-    /// up together ([`Envmap::eval_pdf8`]). Each path draws from its own
+    /// next-event estimations are drawn together ([`Envmap::sample8`]), the
+    /// radiance of the environment found by those that escape is looked up
+    /// together ([`Envmap::eval_pdf8`]), and the values of the BSDFs that
+    /// have an 8-lane evaluation ([`Bsdf::has_eval8`]) toward the light
+    /// samples and at the BSDF samples' directions are computed together
+    /// ([`eval_pdf8`]). Each path draws from its own
     /// sampler in the order [`Self::li_path`] does, and the lanes give the
     /// scalar functions' bits: each sample is the one `li_seen` gives.
     pub(crate) fn li_beam(
