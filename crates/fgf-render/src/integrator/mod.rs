@@ -63,7 +63,9 @@ enum Known<T> {
 }
 
 /// A path between its interactions: what the stages of
-/// [`World::li_beam`] carry from one to the next.
+/// [`World::li_beam`] carry from one to the next. (Without media, the
+/// spectral MIS factor `1 / mean(r_u)` of [`World::li_path`] is 1 and is
+/// left out.)
 struct PathState {
     ray: Ray,
     /// The limit of `ray` (finite only for the camera ray, at `far_clip`).
@@ -83,9 +85,6 @@ struct PathState {
     prev_pdf: f32,
     prev_p: Vec3A,
     eta: f32,
-    start: SegmentStart,
-    /// `1 / mean(r_u)` of [`World::li_path`]'s spectral MIS: 1 without media.
-    inv_mis: f32,
 }
 
 /// A surface interaction at which a path scatters, as
@@ -699,8 +698,6 @@ impl World {
             prev_pdf: 1.0,
             prev_p: ray.o,
             eta: 1.0,
-            start: SegmentStart::Surface,
-            inv_mis: 1.0,
         })
     }
 
@@ -761,7 +758,7 @@ impl World {
                                 / (cos_l * world.geom.areas[shape as usize]);
                             mis_power(st.prev_pdf, light_pdf)
                         };
-                        st.l += st.thr * radiance * (w * st.inv_mis);
+                        st.l += st.thr * radiance * w;
                     }
                 }
             }
@@ -786,7 +783,6 @@ impl World {
                     }
                 };
                 st.ray = Ray { o, d: ray.d };
-                st.start = SegmentStart::Surface;
                 continue;
             }
             // This interaction would be event number depth + 1: nothing it
@@ -826,7 +822,7 @@ impl World {
         } else {
             mis_power(st.prev_pdf, env_pdf * self.select_pdf())
         };
-        st.l += st.thr * radiance * (w * st.inv_mis);
+        st.l += st.thr * radiance * w;
     }
 
     /// Scatter the path at the surface interaction `stop`: next-event
@@ -870,7 +866,7 @@ impl World {
                 NeeLight::Evaluated(ls, toward) => world.direct_toward(&vertex, ls, toward, s),
             };
             if let Some((le, f, w)) = direct {
-                st.l += st.thr * le * f * (w * st.inv_mis);
+                st.l += st.thr * le * f * w;
             }
         }
         let bs = match sample {
@@ -905,8 +901,7 @@ impl World {
             o: offset_point(h.p, h.n, wo),
             d: wo,
         };
-        st.start = SegmentStart::Surface;
-        st.thr != Spectrum::ZERO && world.roulette(st.depth, &mut st.thr, st.inv_mis, st.eta, s)
+        st.thr != Spectrum::ZERO && world.roulette(st.depth, &mut st.thr, 1.0, st.eta, s)
     }
 
     /// `thr·inv_mis` is the path weight, the same whichever channel is the
