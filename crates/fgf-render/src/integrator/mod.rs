@@ -147,6 +147,16 @@ fn groups8(mut todo: u32, bsdf_id: &[u32; BEAM], mut f: impl FnMut([usize; 8], u
     }
 }
 
+/// The lanes of the mask `mask`, in increasing order.
+#[inline(always)]
+fn lanes_of(mut mask: u32) -> impl Iterator<Item = usize> {
+    std::iter::from_fn(move || {
+        let j = mask.trailing_zeros() as usize;
+        mask &= mask.wrapping_sub(1);
+        (j < 32).then_some(j)
+    })
+}
+
 /// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
 #[inline(always)]
 fn lanes8(a: &[f32; BEAM], c: usize) -> F8 {
@@ -261,12 +271,16 @@ impl World {
         debug_assert!(self.takes_first_hit() && self.lone_envmap().is_some());
         let m = rays.len().min(BEAM);
         let mut paths: [Option<PathState>; BEAM] = std::array::from_fn(|_| None);
+        // The paths that go on (a mask of lanes: the loops below visit
+        // only those, not all 16 while the last few paths finish).
+        let mut live = 0u32;
         for j in 0..m {
             let known = match first[j] {
                 Some(h) => Known::Hit(h),
                 None => Known::Miss,
             };
             paths[j] = self.path_start(rays[j], t_max[j], known, &mut s[j]);
+            live |= u32::from(paths[j].is_some()) << j;
             out[j] = Spectrum::ZERO;
         }
         // Per round: each live path's next stop; the lanes (and variates)
@@ -280,9 +294,10 @@ impl World {
         let mut light: [Option<LightSample>; BEAM] = [None; BEAM];
         let mut escaped = [0usize; BEAM];
         let mut dirs = [[0f32; BEAM]; 3];
-        loop {
-            let (mut n_need, mut n_escaped, mut any) = (0, 0, false);
-            for j in 0..m {
+        while live != 0 {
+            // `surface`: the paths at a surface interaction this round.
+            let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u32);
+            for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
                 // (Written in place: a stop is some 300 bytes.)
                 stops[j] = self.path_advance(st);
@@ -290,6 +305,7 @@ impl World {
                     None => {
                         out[j] = st.l;
                         paths[j] = None;
+                        live &= !(1 << j);
                     }
                     Some(Stop::Escaped) => {
                         for (c, d) in dirs.iter_mut().enumerate() {
@@ -299,7 +315,7 @@ impl World {
                         n_escaped += 1;
                     }
                     Some(Stop::Surface(stop)) => {
-                        any = true;
+                        surface |= 1 << j;
                         bsdf_id[j] = stop.info.bsdf;
                         if stop.nee {
                             let (_, _, uj) = self.draw_emitter(&mut s[j]);
@@ -321,9 +337,10 @@ impl World {
                         out[j] = st.l;
                     }
                     paths[j] = None;
+                    live &= !(1 << j);
                 }
             }
-            if !any {
+            if surface == 0 {
                 break;
             }
             for c in (0..n_need).step_by(8) {
@@ -375,8 +392,8 @@ impl World {
             let mut bs: [Option<BsdfSample>; BEAM] = [None; BEAM];
             let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); BEAM];
             let mut us = [(0f32, [0f32; 2]); BEAM];
-            for j in 0..m {
-                let (Some(Stop::Surface(stop)), Some(_)) = (&stops[j], &paths[j]) else {
+            for j in lanes_of(surface) {
+                let Some(Stop::Surface(stop)) = &stops[j] else {
                     continue;
                 };
                 if !self.bsdf_eval8[bsdf_id[j] as usize] {
@@ -413,7 +430,7 @@ impl World {
                 let stop = stop_of(j);
                 bs[j] = stop.bsdf.sample(stop.wi_local, us[j].0, us[j].1);
             }
-            for j in 0..m {
+            for j in lanes_of(surface) {
                 let (Some(Stop::Surface(stop)), Some(st)) = (&stops[j], &mut paths[j]) else {
                     continue;
                 };
@@ -428,6 +445,7 @@ impl World {
                 if !self.path_scatter(st, stop, nee, sample, &mut s[j]) {
                     out[j] = st.l;
                     paths[j] = None;
+                    live &= !(1 << j);
                 }
             }
         }
