@@ -81,6 +81,8 @@ pub struct World {
     /// Per BSDF of `bsdfs`: [`Bsdf::has_eval8`], whether paths in step
     /// evaluate it toward their light samples eight at a time.
     pub(crate) bsdf_eval8: Vec<bool>,
+    /// Per scene BSDF, [`Bsdf::has_sample8`].
+    pub(crate) bsdf_sample8: Vec<bool>,
 }
 
 impl World {
@@ -151,6 +153,7 @@ impl World {
             any_null,
             any_passable,
             bsdf_eval8: bsdfs.iter().map(Bsdf::has_eval8).collect(),
+            bsdf_sample8: bsdfs.iter().map(Bsdf::has_sample8).collect(),
             geom,
             shapes,
             bsdfs,

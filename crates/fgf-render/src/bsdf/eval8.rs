@@ -16,6 +16,7 @@ use super::plastic::{RoughPlastic, TABLE_RES};
 use super::rough::RoughConductor;
 use super::{Bsdf, BsdfKind};
 use crate::lanes::{D8, F8, I8, M8};
+use crate::math::sample_concentric_disk8;
 use crate::spectrum::Spectrum;
 use fgf_scene::TexturedParam;
 use glam::Vec3A;
@@ -67,6 +68,17 @@ impl Bsdf {
             .all(|(p, _)| per_lane.contains(p))
     }
 
+    /// Whether [`sample_wo8_lanes`] draws this scene BSDF's directions:
+    /// those of [`Bsdf::has_eval8`] that sample GGX's visible normals.
+    pub(crate) fn has_sample8(&self) -> bool {
+        self.has_eval8()
+            && match &self.kind {
+                BsdfKind::RoughConductor(c) => c.distr.visible,
+                BsdfKind::RoughPlastic(p) => p.distr.visible,
+                _ => false,
+            }
+    }
+
     /// For a BSDF for which [`Bsdf::has_eval8`] holds (made concrete at a
     /// hit): the direction [`Bsdf::sample`] draws with these variates, as
     /// `(wi, wo, flipped)` in the frame where it samples (`wi.z > 0`;
@@ -108,7 +120,6 @@ pub(crate) fn eval_pdf8(
     debug_assert!((1..=8).contains(&n));
     let lane = |l: usize| bsdfs[l.min(n - 1)];
     let b0 = lane(0);
-    let to8 = |v: [Vec3A; 8]| -> V8 { std::array::from_fn(|c| F8::from_array(v.map(|x| x[c]))) };
     let (mut wi, mut wo) = (to8(wi), to8(wo));
     let zero = F8::splat(0.0);
     if b0.twosided {
@@ -139,11 +150,112 @@ pub(crate) fn eval_pdf8(
         }
         _ => unreachable!("eval_pdf8 of a BSDF without has_eval8"),
     };
-    let (f, pdf) = (f.map(F8::to_array), pdf.to_array());
-    (
-        std::array::from_fn(|l| Vec3A::new(f[0][l], f[1][l], f[2][l])),
-        pdf,
-    )
+    (from8(f), pdf.to_array())
+}
+
+/// [`Bsdf::sample_wo8`] of eight lanes at once, with the variates `u1`,
+/// `u2` of each: for lanes that are instances of one scene BSDF `b` for
+/// which [`Bsdf::has_sample8`] holds (what sampling reads, the microfacet
+/// distribution and a plastic's lobe weights and table, is then the same in
+/// all). Returns per lane `wi` (flipped to the front), `wo`, and the masks
+/// of the lanes that have a direction and of those flipped. Each lane gives
+/// the scalar code's bits: the disk through the same `sin_cos_2pi`, glam's
+/// normalisation (a division by the length) and cross product.
+#[inline(never)]
+pub(crate) fn sample_wo8_lanes(
+    b: &Bsdf,
+    wi: [Vec3A; 8],
+    u1: [f32; 8],
+    u2: [[f32; 2]; 8],
+) -> ([Vec3A; 8], [Vec3A; 8], u32, u32) {
+    let zero = F8::splat(0.0);
+    let mut wi = to8(wi);
+    let flipped = if b.twosided {
+        wi[2].lt(zero)
+    } else {
+        zero.lt(zero)
+    };
+    wi[2] = flipped.select(wi[2].neg(), wi[2]);
+    let disk = sample_concentric_disk8([
+        F8::from_array(u2.map(|u| u[0])),
+        F8::from_array(u2.map(|u| u[1])),
+    ]);
+    let wo = match &b.kind {
+        BsdfKind::RoughConductor(c) => reflect8(wi, ggx_visible8(&c.distr, wi, disk)),
+        BsdfKind::RoughPlastic(p) => {
+            let specular = F8::from_array(u1).lt(prob_specular8(p, t8(p, wi[2])));
+            let glossy = reflect8(wi, ggx_visible8(&p.distr, wi, disk));
+            // `sample_cosine_hemisphere` on the same disk.
+            let one = F8::splat(1.0);
+            let z = one
+                .sub(disk[0].mul(disk[0]))
+                .sub(disk[1].mul(disk[1]))
+                .max(zero)
+                .sqrt();
+            [
+                specular.select(glossy[0], disk[0]),
+                specular.select(glossy[1], disk[1]),
+                specular.select(glossy[2], z),
+            ]
+        }
+        _ => unreachable!("sample_wo8_lanes of a BSDF without has_sample8"),
+    };
+    let ok = zero.lt(wi[2]).and(zero.lt(wo[2]));
+    (from8(wi), from8(wo), ok.bitmask(), flipped.bitmask())
+}
+
+/// Eight vectors as lanes.
+#[inline(always)]
+fn to8(v: [Vec3A; 8]) -> V8 {
+    std::array::from_fn(|c| F8::from_array(v.map(|x| x[c])))
+}
+
+/// Lanes as eight vectors.
+#[inline(always)]
+fn from8(v: V8) -> [Vec3A; 8] {
+    let v = v.map(F8::to_array);
+    std::array::from_fn(|l| Vec3A::new(v[0][l], v[1][l], v[2][l]))
+}
+
+/// [`super::microfacet::reflect`]: `2 (wi·m) m − wi`.
+#[inline(always)]
+fn reflect8(wi: V8, m: V8) -> V8 {
+    let d2 = F8::splat(2.0).mul(dot8(wi, m));
+    std::array::from_fn(|c| d2.mul(m[c]).sub(wi[c]))
+}
+
+/// The visible GGX normal of `Microfacet::sample` (`visible`) for `wi`,
+/// from the point `disk` of the concentric disk map of its variates.
+#[inline(always)]
+fn ggx_visible8(distr: &Microfacet, wi: V8, disk: [F8; 2]) -> V8 {
+    let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+    let (ax, ay) = (F8::splat(distr.ax), F8::splat(distr.ay));
+    let normalize = |v: V8| {
+        let len = dot8(v, v).sqrt();
+        v.map(|x| x.div(len))
+    };
+    let vh = normalize([ax.mul(wi[0]), ay.mul(wi[1]), wi[2]]);
+    let len2 = vh[0].mul(vh[0]).add(vh[1].mul(vh[1]));
+    let (tilted, len) = (zero.lt(len2), len2.sqrt());
+    let t1 = [
+        tilted.select(vh[1].neg().div(len), one),
+        tilted.select(vh[0].div(len), zero),
+        zero,
+    ];
+    let t2 = [
+        vh[1].mul(t1[2]).sub(vh[2].mul(t1[1])),
+        vh[2].mul(t1[0]).sub(vh[0].mul(t1[2])),
+        vh[0].mul(t1[1]).sub(vh[1].mul(t1[0])),
+    ];
+    let [p1, q] = disk;
+    let s = F8::splat(0.5).mul(one.add(vh[2]));
+    let p2 = one
+        .sub(s)
+        .mul(one.sub(p1.mul(p1)).max(zero).sqrt())
+        .add(s.mul(q));
+    let k = one.sub(p1.mul(p1)).sub(p2.mul(p2)).max(zero).sqrt();
+    let nh: V8 = std::array::from_fn(|c| p1.mul(t1[c]).add(p2.mul(t2[c])).add(k.mul(vh[c])));
+    normalize([ax.mul(nh[0]), ay.mul(nh[1]), nh[2].max(F8::splat(1e-6))])
 }
 
 /// `(wi + wo).try_normalize()`: the half vector, and the lanes where it
@@ -276,31 +388,44 @@ fn fresnel_dielectric_r8(cos_i: F8, eta: f32) -> F8 {
     cos_t_sq.le(zero).select(one, r)
 }
 
+/// `RoughPlastic::t`, the coating's transmittance table at cosine `mu`.
+#[inline(always)]
+fn t8(p: &RoughPlastic, mu: F8) -> F8 {
+    let x = mu.mul(F8::splat((TABLE_RES - 1) as f32));
+    let i = x
+        .trunc()
+        .max(I8::splat(0))
+        .min(I8::splat(TABLE_RES as i32 - 2));
+    let w = x.sub(i.to_f32());
+    let at = |i: I8| F8::gather(&p.t_ext[..], i);
+    F8::splat(1.0)
+        .sub(w)
+        .mul(at(i))
+        .add(w.mul(at(i.add(I8::splat(1)))))
+}
+
+/// `Coated::prob_specular`: the probability of sampling the coating's
+/// specular lobe, given the transmittance `ti` toward `wi`.
+#[inline(always)]
+fn prob_specular8(p: &RoughPlastic, ti: F8) -> F8 {
+    let (zero, one) = (F8::splat(0.0), F8::splat(1.0));
+    let sw = p.c.spec_weight;
+    let ps = one.sub(ti).mul(F8::splat(sw));
+    let pd = ti.mul(F8::splat(1.0 - sw));
+    let sum = ps.add(pd);
+    zero.lt(sum).select(ps.div(sum), zero)
+}
+
 /// [`RoughPlastic::eval_pdf`] with `c.base()` and `c.specular` of each lane.
 #[inline(always)]
 fn plastic8(p: &RoughPlastic, base: V8, spec: V8, wi: V8, wo: V8) -> (V8, F8) {
     let zero = F8::splat(0.0);
     let one = F8::splat(1.0);
     let live = zero.lt(wi[2]).and(zero.lt(wo[2]));
-    let t = |mu: F8| {
-        let x = mu.mul(F8::splat((TABLE_RES - 1) as f32));
-        let i = x
-            .trunc()
-            .max(I8::splat(0))
-            .min(I8::splat(TABLE_RES as i32 - 2));
-        let w = x.sub(i.to_f32());
-        let at = |i: I8| F8::gather(&p.t_ext[..], i);
-        one.sub(w).mul(at(i)).add(w.mul(at(i.add(I8::splat(1)))))
-    };
-    let (ti, to) = (t(wi[2]), t(wo[2]));
+    let (ti, to) = (t8(p, wi[2]), t8(p, wo[2]));
     let s = ti.mul(to).mul(wo[2]);
     let mut f: V8 = std::array::from_fn(|c| base[c].mul(s));
-    // prob_specular(ti)
-    let sw = p.c.spec_weight;
-    let ps = one.sub(ti).mul(F8::splat(sw));
-    let pd = ti.mul(F8::splat(1.0 - sw));
-    let sum = ps.add(pd);
-    let ps = zero.lt(sum).select(ps.div(sum), zero);
+    let ps = prob_specular8(p, ti);
     let mut pdf = one.sub(ps).mul(wo[2].max(zero).mul(F8::splat(1.0 / PI)));
     let (h, ok) = half8(wi, wo);
     let d = d8(&p.distr, h);
@@ -359,6 +484,70 @@ mod tests {
 
     fn spectrum(rng: &mut Pcg64) -> Spectrum {
         Vec3A::new(rng.random(), rng.random(), rng.random())
+    }
+
+    /// Each lane draws the scalar `sample_wo8`'s direction, bit for bit:
+    /// conductors and plastics (both lobes), one- and two-sided (seen from
+    /// either side), anisotropic or not, with variates on the disk map's
+    /// special points (its centre, axes and diagonals) among random ones.
+    #[test]
+    fn sample_wo8_lanes_is_sample_wo8() {
+        let mut rng = Pcg64::seed_from_u64(29);
+        let special = [0.0, 0.25, 0.5, 0.75, 1.0 - f32::EPSILON / 2.0];
+        for round in 0..3000 {
+            let twosided = rng.random::<bool>();
+            let d = Microfacet {
+                visible: true,
+                ..distr(&mut rng)
+            };
+            let kind = if round % 2 == 0 {
+                BsdfKind::RoughConductor(RoughConductor {
+                    eta: Vec3A::new(1.66, 0.88, 0.52),
+                    k: Vec3A::new(9.22, 6.27, 4.84),
+                    r: Vec3A::ONE,
+                    mirror: false,
+                    distr: d,
+                })
+            } else {
+                BsdfKind::RoughPlastic(RoughPlastic::new(
+                    [1.5, 1.33][round / 2 % 2],
+                    spectrum(&mut rng),
+                    spectrum(&mut rng),
+                    round % 4 == 1,
+                    d,
+                ))
+            };
+            let b = Bsdf {
+                kind,
+                twosided,
+                textures: None,
+            };
+            assert!(b.has_sample8());
+            let mut variate = || {
+                if rng.random_range(0..4) == 0 {
+                    special[rng.random_range(0..special.len())]
+                } else {
+                    rng.random::<f32>()
+                }
+            };
+            let u1: [f32; 8] = std::array::from_fn(|_| variate());
+            let u2: [[f32; 2]; 8] = std::array::from_fn(|_| [variate(), variate()]);
+            let wi: [Vec3A; 8] = std::array::from_fn(|_| direction(&mut rng));
+            let (wi8, wo8, ok, flipped) = sample_wo8_lanes(&b, wi, u1, u2);
+            for l in 0..8 {
+                let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+                let lane =
+                    (ok >> l & 1 == 1).then(|| (bits(wi8[l]), bits(wo8[l]), flipped >> l & 1 == 1));
+                let scalar = b
+                    .sample_wo8(wi[l], u1[l], u2[l])
+                    .map(|(wi, wo, f)| (bits(wi), bits(wo), f));
+                assert_eq!(
+                    lane, scalar,
+                    "round {round} lane {l}: wi {} u1 {} u2 {:?}",
+                    wi[l], u1[l], u2[l]
+                );
+            }
+        }
     }
 
     /// Each lane gives the bits of the scalar `eval_pdf`, for conductors

@@ -38,7 +38,7 @@ pub mod rough;
 #[cfg(test)]
 mod tests;
 
-pub(crate) use eval8::eval_pdf8;
+pub(crate) use eval8::{eval_pdf8, sample_wo8_lanes};
 pub use fresnel::{
     fresnel_conductor, fresnel_conductor_rgb, fresnel_dielectric, FresnelDielectric,
 };

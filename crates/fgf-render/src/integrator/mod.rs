@@ -37,7 +37,7 @@
 mod direct;
 mod direct_lighting;
 
-use crate::bsdf::{eval_pdf8, Bsdf, BsdfSample};
+use crate::bsdf::{eval_pdf8, sample_wo8_lanes, Bsdf, BsdfSample};
 use crate::emitter::envmap::Envmap;
 use crate::emitter::{Emitter, LightSample};
 use crate::geometry::bvh::BEAM;
@@ -115,9 +115,11 @@ enum Stop<'w> {
 }
 
 /// The fewest paths at one BSDF whose values (toward their light samples,
-/// at their sampled directions) are computed together ([`eval_pdf8`]);
-/// fewer are computed one by one. (By instructions an 8-lane evaluation
-/// costs about three scalar ones; docs/benchmarks.md.)
+/// at their sampled directions) are computed together ([`eval_pdf8`]), and
+/// whose sampled directions are ([`sample_wo8_lanes`]); fewer are computed
+/// one by one. (By instructions an 8-lane evaluation costs about three
+/// scalar ones, and 3 was also the best of 1, 2 and 3 for the directions;
+/// docs/benchmarks.md.)
 const EVAL8_LANES_MIN: usize = 3;
 
 /// Calls `f(lanes, n)` with the paths of `todo` (a mask of lanes) in
@@ -385,22 +387,41 @@ impl World {
             });
             // The BSDF samples of the paths at such BSDFs: their variates
             // drawn now (the shadow rays, traced before in `li_path`'s
-            // order, draw none in scenes without media), each direction
-            // sampled alone and the values there eight at a time
-            // (`sampled`: the paths whose sample is made here).
-            let (mut sampled, mut todo) = (0u32, 0u32);
+            // order, draw none in scenes without media), then their
+            // directions, eight at a time where the scene BSDF draws them so
+            // ([`sample_wo8_lanes`]; `draw8`), else one by one, and the
+            // values there eight at a time (`sampled`: the paths whose
+            // sample is made here; `todo`: those that have a direction).
+            let (mut sampled, mut draw8, mut todo) = (0u32, 0u32, 0u32);
             let mut bs: [Option<BsdfSample>; BEAM] = [None; BEAM];
             let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); BEAM];
             let mut us = [(0f32, [0f32; 2]); BEAM];
             for j in lanes_of(surface) {
-                let Some(Stop::Surface(stop)) = &stops[j] else {
-                    continue;
-                };
                 if !self.bsdf_eval8[bsdf_id[j] as usize] {
                     continue;
                 }
                 us[j] = (s[j].next_1d(), s[j].next_2d());
                 sampled |= 1 << j;
+                draw8 |= u32::from(self.bsdf_sample8[bsdf_id[j] as usize]) << j;
+            }
+            let mut alone = sampled;
+            groups8(draw8, &bsdf_id, |lanes, n| {
+                let (wi, wo, ok, flipped) = sample_wo8_lanes(
+                    &stop_of(lanes[0]).bsdf,
+                    lanes.map(|j| stop_of(j).wi_local),
+                    lanes.map(|j| us[j].0),
+                    lanes.map(|j| us[j].1),
+                );
+                for (k, &j) in lanes[..n].iter().enumerate() {
+                    if ok >> k & 1 != 0 {
+                        sdir[j] = (wi[k], wo[k], flipped >> k & 1 != 0);
+                        todo |= 1 << j;
+                    }
+                    alone &= !(1 << j);
+                }
+            });
+            for j in lanes_of(alone) {
+                let stop = stop_of(j);
                 if let Some(d) = stop.bsdf.sample_wo8(stop.wi_local, us[j].0, us[j].1) {
                     sdir[j] = d;
                     todo |= 1 << j;
