@@ -3,13 +3,17 @@
 //! BSDF of up to eight surface interactions at the same scene BSDF, toward
 //! their light samples and at the directions their BSDF samples draw, for
 //! the models that take most of a glossy scene's shading,
-//! `roughconductor` and `roughplastic` on GGX.
+//! `roughconductor` and `roughplastic` on GGX; and the directions those
+//! samples draw, eight at once, where they sample visible normals
+//! ([`sample_wo8_lanes`]).
 //!
 //! Each lane performs the scalar code's operations in its order (see
-//! [`crate::lanes`]), so it gives the bits of [`Bsdf::eval_pdf`]: the
-//! dot products as glam computes them (`(x·x' + y·y') + z·z'`), the
-//! normalisation of the half vector by the reciprocal of its length, and
-//! the conductor's Fresnel term in `f64`.
+//! [`crate::lanes`]), so it gives the bits of [`Bsdf::eval_pdf`] and
+//! [`Bsdf::sample_wo8`]: the dot products as glam computes them
+//! (`(x·x' + y·y') + z·z'`), the normalisation of the half vector by the
+//! reciprocal of its length (and of other vectors by their length, as
+//! glam's `normalize` does), the conductor's Fresnel term in `f64`, and the
+//! concentric disk map through `sin_cos_2pi`.
 
 use super::microfacet::{Distribution, Microfacet};
 use super::plastic::{RoughPlastic, TABLE_RES};

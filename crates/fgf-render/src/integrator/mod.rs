@@ -258,7 +258,8 @@ impl World {
     /// together ([`Envmap::eval_pdf8`]), and the values of the BSDFs that
     /// have an 8-lane evaluation ([`Bsdf::has_eval8`]) toward the light
     /// samples and at the BSDF samples' directions are computed together
-    /// ([`eval_pdf8`]). Each path draws from its own
+    /// ([`eval_pdf8`]), as are those directions where the BSDF samples
+    /// visible normals ([`sample_wo8_lanes`]). Each path draws from its own
     /// sampler in the order [`Self::li_path`] does, and the lanes give the
     /// scalar functions' bits: each sample is the one `li_seen` gives.
     pub(crate) fn li_beam(
