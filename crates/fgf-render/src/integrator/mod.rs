@@ -405,7 +405,7 @@ impl World {
                 sampled |= 1 << j;
                 draw8 |= u32::from(self.bsdf_sample8[bsdf_id[j] as usize]) << j;
             }
-            let mut alone = sampled;
+            let mut draw_alone = sampled;
             groups8(draw8, &bsdf_id, |lanes, n| {
                 let (wi, wo, ok, flipped) = sample_wo8_lanes(
                     &stop_of(lanes[0]).bsdf,
@@ -418,10 +418,10 @@ impl World {
                         sdir[j] = (wi[k], wo[k], flipped >> k & 1 != 0);
                         todo |= 1 << j;
                     }
-                    alone &= !(1 << j);
+                    draw_alone &= !(1 << j);
                 }
             });
-            for j in lanes_of(alone) {
+            for j in lanes_of(draw_alone) {
                 let stop = stop_of(j);
                 if let Some(d) = stop.bsdf.sample_wo8(stop.wi_local, us[j].0, us[j].1) {
                     sdir[j] = d;
@@ -446,9 +446,7 @@ impl World {
                     alone &= !(1 << j);
                 }
             });
-            while alone != 0 {
-                let j = alone.trailing_zeros() as usize;
-                alone &= alone - 1;
+            for j in lanes_of(alone) {
                 let stop = stop_of(j);
                 bs[j] = stop.bsdf.sample(stop.wi_local, us[j].0, us[j].1);
             }
