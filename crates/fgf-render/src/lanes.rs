@@ -32,6 +32,27 @@ pub(crate) use avx::{D8, F8, I8, M8};
 #[cfg(not(all(target_arch = "x86_64", target_feature = "avx2")))]
 pub(crate) use portable::{D8, F8, I8, M8};
 
+/// Ask the CPU to start loading the cache lines of `*r` (its first and
+/// last byte: a value of up to 64 bytes may straddle two lines), without
+/// waiting for them. A hint: it changes no value, and does nothing off
+/// x86-64.
+#[inline(always)]
+pub(crate) fn prefetch<T>(r: &T) {
+    #[cfg(target_arch = "x86_64")]
+    {
+        use std::arch::x86_64::{_mm_prefetch, _MM_HINT_T0};
+        let p = (r as *const T).cast::<i8>();
+        // SAFETY: a prefetch reads nothing into the program and never
+        // faults; the pointers are within (or one before the end of) `*r`.
+        unsafe {
+            _mm_prefetch::<_MM_HINT_T0>(p);
+            _mm_prefetch::<_MM_HINT_T0>(p.add(std::mem::size_of::<T>().saturating_sub(1)));
+        }
+    }
+    #[cfg(not(target_arch = "x86_64"))]
+    let _ = r;
+}
+
 /// The largest index a gather accepts for a table of `len` entries:
 /// `len - 1`, which must fit an `i32` (the gathers' signed offsets).
 #[inline(always)]

@@ -6,6 +6,7 @@ use super::bvh::{Aabb, Beam, BEAM, PACK};
 use super::pack::splat_ray;
 use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
 use super::Geometry;
+use crate::lanes::prefetch;
 use crate::ray::Ray;
 use glam::Vec3A;
 
@@ -86,6 +87,13 @@ impl Geometry {
     /// distance, that of the least primitive id ([`keep_nearest`]).
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
+        self.nearest(ray, t_max).map(|r| self.make_hit(ray, r))
+    }
+
+    /// The walk of [`Self::intersect`]: its nearest hit as a
+    /// [`HitRecord`], made into a [`Hit`] by [`Self::make_hit`].
+    #[inline(always)]
+    pub fn nearest(&self, ray: &Ray, t_max: f32) -> Option<HitRecord> {
         // (primitive, t, barycentric u, v) of the nearest hit so far.
         let mut best: Option<(u32, f32, f32, f32)> = None;
         self.bvh.traverse_leaves::<true>(
@@ -105,7 +113,39 @@ impl Geometry {
                 limit
             },
         );
-        best.map(|b| self.make_hit(ray, HitRecord(b)))
+        best.map(HitRecord)
+    }
+
+    /// Start loading what [`Self::make_hit`] reads first for `r`: the hit
+    /// triangle's record. With [`Self::prefetch_shading`] once that has
+    /// arrived, this lets the cache misses of several paths' hits overlap
+    /// (`World::li_beam`).
+    #[inline(always)]
+    pub fn prefetch_hit(&self, HitRecord((prim, ..)): &HitRecord) {
+        if prim >> KIND_SHIFT == KIND_TRI {
+            if let Some(t) = self.tris.get((prim & INDEX_MASK) as usize) {
+                prefetch(t);
+            }
+        }
+    }
+
+    /// Start loading the rest of what [`Self::make_hit`] and
+    /// [`Self::uv`] read for `r`: the hit triangle's vertex normals and
+    /// texture coordinates (the record itself is read here).
+    #[inline(always)]
+    pub fn prefetch_shading(&self, HitRecord((prim, ..)): &HitRecord) {
+        if prim >> KIND_SHIFT != KIND_TRI {
+            return;
+        }
+        let Some(t) = self.tris.get((prim & INDEX_MASK) as usize) else {
+            return;
+        };
+        if let Some(n) = self.vertex_normals.get(t.normals as usize) {
+            prefetch(n);
+        }
+        if let Some(uv) = self.tri_uvs.get(t.uvs as usize) {
+            prefetch(uv);
+        }
     }
 
     /// The nearest hits of a bundle of up to [`BEAM`] nearly parallel

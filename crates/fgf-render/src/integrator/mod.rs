@@ -41,7 +41,7 @@ use crate::bsdf::{eval_pdf8, sample_wo8_lanes, Bsdf, BsdfSample};
 use crate::emitter::envmap::Envmap;
 use crate::emitter::{Emitter, LightSample};
 use crate::geometry::bvh::BEAM;
-use crate::geometry::Hit;
+use crate::geometry::{Hit, HitRecord};
 use crate::lanes::F8;
 use crate::math::{bin_index, mis_power, Frame, Sampler};
 use crate::medium::{DistanceEvent, SegmentStart};
@@ -300,6 +300,7 @@ impl World {
         while live != 0 {
             // `surface`: the paths at a surface interaction this round.
             let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u32);
+            self.walk_all(&mut paths, live);
             for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
                 // (Written in place: a stop is some 300 bytes.)
@@ -468,6 +469,43 @@ impl World {
                     live &= !(1 << j);
                 }
             }
+        }
+    }
+
+    /// The nearest hits of the paths `live` whose next hit is not yet
+    /// known, all walked before any is made into a [`Hit`]: each walk
+    /// starts the load of its hit triangle's record, and once all have
+    /// walked, the loads of their normals and texture coordinates start
+    /// together, so that these cache misses overlap with each other and
+    /// with the walks instead of stalling each path in turn. (The same
+    /// hits as [`Self::path_advance`]'s own query, which scenes with
+    /// `null` boundaries need and which [`Self::li_beam`] does not serve.)
+    #[inline(always)]
+    fn walk_all(&self, paths: &mut [Option<PathState>; BEAM], live: u32) {
+        let geom = &self.geom;
+        let mut rec: [Option<HitRecord>; BEAM] = [None; BEAM];
+        let mut walked = 0u32;
+        for j in lanes_of(live) {
+            let Some(st) = &paths[j] else { continue };
+            if let Known::Unknown = st.known {
+                rec[j] = geom.nearest(&st.ray, st.t_max);
+                if let Some(r) = &rec[j] {
+                    geom.prefetch_hit(r);
+                }
+                walked |= 1 << j;
+            }
+        }
+        for j in lanes_of(walked) {
+            if let Some(r) = &rec[j] {
+                geom.prefetch_shading(r);
+            }
+        }
+        for j in lanes_of(walked) {
+            let Some(st) = &mut paths[j] else { continue };
+            st.known = match rec[j] {
+                Some(r) => Known::Hit(geom.make_hit(&st.ray, r)),
+                None => Known::Miss,
+            };
         }
     }
 
