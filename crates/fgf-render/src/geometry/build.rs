@@ -4,7 +4,7 @@
 use super::bvh::{Aabb, Bvh};
 use super::pack::TriPack;
 use super::types::{
-    Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI, PAD,
+    Corners, Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI, PAD,
 };
 use super::uv::cube_uv;
 use super::Geometry;
@@ -77,8 +77,10 @@ fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
 #[derive(Default)]
 struct Builder {
     tris: Vec<Tri>,
-    vertex_normals: Vec<[glam::Vec3; 3]>,
-    tri_uvs: Vec<[Vec2; 3]>,
+    corners: Vec<Corners>,
+    positions: Vec<glam::Vec3>,
+    normals: Vec<glam::Vec3>,
+    uvs: Vec<Vec2>,
     spheres: Vec<Sphere>,
     sphere_to_local: Vec<Mat3>,
     disks: Vec<Disk>,
@@ -93,6 +95,13 @@ impl Geometry {
     /// BVH over all their primitives.
     pub fn build(shapes: &[ShapeDesc]) -> Result<Geometry, RenderError> {
         let mut g = Builder::default();
+        if shapes.len() as u64 > u64::from(!Corners::FLAGS) {
+            return Err(RenderError::InvalidScene(format!(
+                "{} shapes: at most {} are supported",
+                shapes.len(),
+                !Corners::FLAGS
+            )));
+        }
         for (si, shape) in shapes.iter().enumerate() {
             validate(shape)?;
             g.add_shape(si as u32, shape);
@@ -206,6 +215,28 @@ impl Builder {
                 .map(|&n| Vec3A::from(nm * n).normalize_or_zero() * sign)
                 .collect()
         });
+        // The vertices join the geometry's arrays after those of the
+        // meshes before; normals and uvs where the mesh has them (as many
+        // as it has, up to its vertex count), else zero.
+        let base = self.positions.len() as u32;
+        self.positions.extend(wp.iter().map(|&p| glam::Vec3::from(p)));
+        let n_normals = wn.as_ref().map_or(0, |w| w.len().min(pos.len()));
+        if n_normals > 0 || !self.normals.is_empty() {
+            self.normals.resize(base as usize, glam::Vec3::ZERO);
+            if let Some(wn) = &wn {
+                let wn = &wn[..n_normals];
+                self.normals.extend(wn.iter().map(|&n| glam::Vec3::from(n)));
+            }
+            self.normals.resize(self.positions.len(), glam::Vec3::ZERO);
+        }
+        let n_uvs = uvs.map_or(0, |uv| uv.len().min(pos.len()));
+        if n_uvs > 0 || !self.uvs.is_empty() {
+            self.uvs.resize(base as usize, Vec2::ZERO);
+            if let Some(uv) = uvs {
+                self.uvs.extend_from_slice(&uv[..n_uvs]);
+            }
+            self.uvs.resize(self.positions.len(), Vec2::ZERO);
+        }
         let first = self.tris.len() as u32;
         let mut cdf = Vec::new();
         let mut total = 0.0f32;
@@ -239,28 +270,23 @@ impl Builder {
             if !(c.length_squared() > 0.0) || !c.is_finite() {
                 continue;
             }
-            let normals_idx = match (&wn, tri_idx) {
-                (Some(wn), Some(t)) if t.iter().all(|&i| (i as usize) < wn.len()) => {
-                    self.vertex_normals.push(t.map(|i| wn[i as usize].into()));
-                    (self.vertex_normals.len() - 1) as u32
-                }
-                _ => u32::MAX,
-            };
-            let uvs_idx = match uvs {
-                Some(uv) if verts.iter().all(|&i| (i as usize) < uv.len()) => {
-                    self.tri_uvs.push(verts.map(|i| uv[i as usize]));
-                    (self.tri_uvs.len() - 1) as u32
-                }
-                _ => u32::MAX,
-            };
+            // Vertex normals only for triangles (not the parallelograms
+            // of cubes and rectangles), as Mitsuba.
+            let with_normals = tri_idx.is_some_and(|t| t.iter().all(|&i| (i as usize) < n_normals));
+            let with_uvs = verts.iter().all(|&i| (i as usize) < n_uvs);
+            self.corners.push(Corners::new(
+                verts.map(|i| base + i),
+                sid,
+                with_normals,
+                with_uvs,
+                sign < 0.0,
+            ));
             let tri = Tri {
                 v0,
                 e1,
                 e2,
                 n: c.normalize() * sign,
                 shape: sid,
-                normals: normals_idx,
-                uvs: uvs_idx,
                 quad,
             };
             total += tri.area();
@@ -325,13 +351,16 @@ impl Builder {
         // What queries and hits read, scattered (the BVH advises its own).
         crate::huge::advise(&packs);
         crate::huge::advise(&prims);
-        crate::huge::advise(&self.tris);
-        crate::huge::advise(&self.vertex_normals);
-        crate::huge::advise(&self.tri_uvs);
+        crate::huge::advise(&self.corners);
+        crate::huge::advise(&self.positions);
+        crate::huge::advise(&self.normals);
+        crate::huge::advise(&self.uvs);
         Geometry {
             tris: self.tris,
-            vertex_normals: self.vertex_normals,
-            tri_uvs: self.tri_uvs,
+            corners: self.corners,
+            positions: self.positions,
+            normals: self.normals,
+            uvs: self.uvs,
             spheres: self.spheres,
             sphere_to_local: self.sphere_to_local,
             disks: self.disks,

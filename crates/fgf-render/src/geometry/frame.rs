@@ -38,10 +38,9 @@ impl Geometry {
             KIND_TRI => {
                 let t = &self.tris[i];
                 let (e1, e2) = (t.e1, t.e2);
-                if t.uvs == u32::MAX {
+                let Some(uv) = self.corner_uvs(&self.corners[i]) else {
                     return e1;
-                }
-                let uv = &self.tri_uvs[t.uvs as usize];
+                };
                 let (d1, d2) = (uv[1] - uv[0], uv[2] - uv[0]);
                 let det = d1.x * d2.y - d1.y * d2.x;
                 if det != 0.0 {

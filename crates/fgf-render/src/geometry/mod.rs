@@ -41,18 +41,22 @@ mod uv;
 pub use types::{Hit, HitRecord, PositionSample};
 
 use bvh::Bvh;
-use glam::{Mat3, Vec2, Vec3};
+use glam::{Mat3, Vec2, Vec3, Vec3A};
 use pack::TriPack;
-use types::{Disk, ShapeSampling, Sphere, Tri};
+use types::{Corners, Disk, ShapeSampling, Sphere, Tri};
 
 /// All surfaces of a scene and their acceleration structure.
 pub struct Geometry {
     tris: Vec<Tri>,
-    /// Per triangle with vertex normals, the three normals (12-byte `Vec3`s:
-    /// a mesh's largest array after the triangles, kept compact).
-    vertex_normals: Vec<[Vec3; 3]>,
-    /// Texture coordinates of the triangles that have them (`Tri::uvs`).
-    tri_uvs: Vec<[Vec2; 3]>,
+    /// Per triangle (as `tris`), its vertices and flags: what hits read.
+    corners: Vec<Corners>,
+    /// The vertices of all meshes, world space (12-byte `Vec3`s), and
+    /// where a mesh has them, their normals and texture coordinates (same
+    /// indices; zero for the vertices of meshes without, and empty while
+    /// no mesh has any).
+    positions: Vec<Vec3>,
+    normals: Vec<Vec3>,
+    uvs: Vec<Vec2>,
     spheres: Vec<Sphere>,
     /// Each sphere's world-to-local linear map (about its centre), for its
     /// texture coordinates.
@@ -67,4 +71,20 @@ pub struct Geometry {
     sampling: Vec<ShapeSampling>,
     /// Surface area of each shape, world space.
     pub areas: Vec<f32>,
+}
+
+impl Geometry {
+    /// The normals at a triangle's corners, if its mesh has them.
+    #[inline(always)]
+    fn corner_normals(&self, c: &Corners) -> Option<[Vec3A; 3]> {
+        c.has_normals()
+            .then(|| c.v.map(|k| Vec3A::from(self.normals[k as usize])))
+    }
+
+    /// The texture coordinates at a triangle's corners, if its mesh has
+    /// them.
+    #[inline(always)]
+    fn corner_uvs(&self, c: &Corners) -> Option<[Vec2; 3]> {
+        c.has_uvs().then(|| c.v.map(|k| self.uvs[k as usize]))
+    }
 }

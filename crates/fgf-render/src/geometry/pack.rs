@@ -15,8 +15,16 @@ use crate::ray::Ray;
 /// Möller–Trumbore's 55, which derives the equivalent of `N`, `a`, `b` per
 /// ray. Lanes without a triangle have `N = 0`, so `t` is NaN and they never
 /// hit.
+///
+/// The layout is fixed (`repr(C)`): the masks, which a leaf test reads
+/// first, share the first cache line with the start of the vertices, and
+/// a pack fills 7 whole lines (64-byte aligned), read in their order.
 #[derive(Debug, Clone, Copy)]
+#[repr(C, align(64))]
 pub(super) struct TriPack {
+    /// Lanes holding triangles / other primitives (spheres, disks).
+    pub(super) tri_mask: u32,
+    pub(super) other_mask: u32,
     v0: [F8; 3],
     n: [F8; 3],
     a: [F8; 3],
@@ -24,9 +32,6 @@ pub(super) struct TriPack {
     /// Per lane: 1 for a triangle (`u + v ≤ 1`), 0 for a parallelogram
     /// (`v ≤ 1`); `u ≤ 1` is tested for both.
     tri_k: F8,
-    /// Lanes holding triangles / other primitives (spheres, disks).
-    pub(super) tri_mask: u32,
-    pub(super) other_mask: u32,
 }
 
 impl TriPack {

@@ -117,34 +117,40 @@ impl Geometry {
     }
 
     /// Start loading what [`Self::make_hit`] reads first for `r`: the hit
-    /// triangle's record. With [`Self::prefetch_shading`] once that has
-    /// arrived, this lets the cache misses of several paths' hits overlap
-    /// (`World::li_beam`).
+    /// triangle's [`Corners`](super::types::Corners). With [`Self::prefetch_shading`] once that
+    /// has arrived, this lets the cache misses of several paths' hits
+    /// overlap (`World::li_beam`).
     #[inline(always)]
     pub fn prefetch_hit(&self, HitRecord((prim, ..)): &HitRecord) {
         if prim >> KIND_SHIFT == KIND_TRI {
-            if let Some(t) = self.tris.get((prim & INDEX_MASK) as usize) {
-                prefetch(t);
+            if let Some(c) = self.corners.get((prim & INDEX_MASK) as usize) {
+                prefetch(c);
             }
         }
     }
 
     /// Start loading the rest of what [`Self::make_hit`] and
-    /// [`Self::uv`] read for `r`: the hit triangle's vertex normals and
-    /// texture coordinates (the record itself is read here).
+    /// [`Self::uv`] read for `r`: the hit triangle's vertices, their
+    /// normals and texture coordinates (its [`Corners`](super::types::Corners) are read here).
     #[inline(always)]
     pub fn prefetch_shading(&self, HitRecord((prim, ..)): &HitRecord) {
         if prim >> KIND_SHIFT != KIND_TRI {
             return;
         }
-        let Some(t) = self.tris.get((prim & INDEX_MASK) as usize) else {
+        let Some(c) = self.corners.get((prim & INDEX_MASK) as usize) else {
             return;
         };
-        if let Some(n) = self.vertex_normals.get(t.normals as usize) {
-            prefetch(n);
-        }
-        if let Some(uv) = self.tri_uvs.get(t.uvs as usize) {
-            prefetch(uv);
+        for k in c.v {
+            let k = k as usize;
+            if let Some(p) = self.positions.get(k) {
+                prefetch(p);
+            }
+            if let (true, Some(n)) = (c.has_normals(), self.normals.get(k)) {
+                prefetch(n);
+            }
+            if let (true, Some(uv)) = (c.has_uvs(), self.uvs.get(k)) {
+                prefetch(uv);
+            }
         }
     }
 
@@ -250,21 +256,27 @@ impl Geometry {
         let i = (prim & INDEX_MASK) as usize;
         match prim >> KIND_SHIFT {
             KIND_TRI => {
-                let tri = &self.tris[i];
-                let ns = if tri.normals != u32::MAX {
-                    let vn = self.vertex_normals[tri.normals as usize].map(Vec3A::from);
-                    let n = (1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2];
-                    n.try_normalize().unwrap_or(tri.n)
-                } else {
-                    tri.n
+                // From the corners, not the (larger) `Tri`: the same
+                // operations as the build's, so the same bits.
+                let c = &self.corners[i];
+                let [v0, a, b] = c.v.map(|k| Vec3A::from(self.positions[k as usize]));
+                let (e1, e2) = (a - v0, b - v0);
+                let n = e1.cross(e2).normalize();
+                let n = if c.flip() { -n } else { n };
+                let ns = match self.corner_normals(c) {
+                    Some(vn) => {
+                        let s = (1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2];
+                        s.try_normalize().unwrap_or(n)
+                    }
+                    None => n,
                 };
                 // The hit point from barycentrics is more accurate than o + t d.
                 Hit {
                     t,
-                    p: tri.v0 + u * tri.e1 + v * tri.e2,
-                    n: tri.n,
+                    p: v0 + u * e1 + v * e2,
+                    n,
                     ns,
-                    shape: tri.shape,
+                    shape: c.shape(),
                     prim,
                     bary: [u, v],
                 }

@@ -50,8 +50,7 @@ impl Geometry {
                 } else {
                     sample_uniform_triangle(u)
                 };
-                let ns = if t.normals != u32::MAX {
-                    let vn = self.vertex_normals[t.normals as usize].map(Vec3A::from);
+                let ns = if let Some(vn) = self.corner_normals(&self.corners[*first as usize + k]) {
                     let n = (1.0 - b[0] - b[1]) * vn[0] + b[0] * vn[1] + b[1] * vn[2];
                     n.try_normalize().unwrap_or(t.n)
                 } else {

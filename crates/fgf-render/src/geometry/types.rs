@@ -38,13 +38,62 @@ pub(super) struct Tri {
     /// Oriented unit geometric normal.
     pub(super) n: Vec3A,
     pub(super) shape: u32,
-    /// Index into `Geometry::vertex_normals`, or `u32::MAX` without normals.
-    pub(super) normals: u32,
-    /// Index into `Geometry::tri_uvs` (the texture coordinates at `v0`,
-    /// `v0 + e1`, `v0 + e2`), or `u32::MAX`: then the barycentrics are the
-    /// texture coordinates, as for Mitsuba's meshes without any.
-    pub(super) uvs: u32,
     pub(super) quad: bool,
+}
+
+/// What a hit on a triangle reads ([`super::Geometry::make_hit`],
+/// [`super::Geometry::uv`]), in 16 bytes: the indices of the vertices at
+/// `v0`, `v0 + e1`, `v0 + e2` into the geometry's vertex arrays (which it
+/// shares with its neighbours), its shape and three flags. The 80-byte
+/// [`Tri`]s, plus per-triangle copies of the vertex normals and texture
+/// coordinates, made some 140 bytes per triangle that every hit read:
+/// on a 120,000-triangle mesh about 17 MB, beyond what this kind of
+/// machine keeps in its last-level cache (`docs/benchmarks.md`).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct Corners {
+    pub(super) v: [u32; 3],
+    /// The shape (below [`Corners::FLAGS`]) and the flags.
+    shape_flags: u32,
+}
+
+impl Corners {
+    /// The bits of `shape_flags` that hold flags; shapes are fewer.
+    pub(super) const FLAGS: u32 = 0b111 << 29;
+    const NORMALS: u32 = 1 << 29;
+    const UVS: u32 = 1 << 30;
+    const FLIP: u32 = 1 << 31;
+
+    /// `normals`: the vertices have normals; `uvs`: texture coordinates
+    /// (without them, the barycentrics are the texture coordinates, as for
+    /// Mitsuba's meshes without any); `flip`: the geometric normal is
+    /// `-(e1 × e2)` normalised rather than `e1 × e2`.
+    pub(super) fn new(v: [u32; 3], shape: u32, normals: bool, uvs: bool, flip: bool) -> Self {
+        debug_assert!(shape & Self::FLAGS == 0);
+        let flag = |b: bool, f: u32| if b { f } else { 0 };
+        Corners {
+            v,
+            shape_flags: shape
+                | flag(normals, Self::NORMALS)
+                | flag(uvs, Self::UVS)
+                | flag(flip, Self::FLIP),
+        }
+    }
+    #[inline(always)]
+    pub(super) fn shape(&self) -> u32 {
+        self.shape_flags & !Self::FLAGS
+    }
+    #[inline(always)]
+    pub(super) fn has_normals(&self) -> bool {
+        self.shape_flags & Self::NORMALS != 0
+    }
+    #[inline(always)]
+    pub(super) fn has_uvs(&self) -> bool {
+        self.shape_flags & Self::UVS != 0
+    }
+    #[inline(always)]
+    pub(super) fn flip(&self) -> bool {
+        self.shape_flags & Self::FLIP != 0
+    }
 }
 
 impl Tri {

@@ -20,11 +20,9 @@ impl Geometry {
         let [a, b] = hit.bary;
         match hit.prim >> KIND_SHIFT {
             KIND_TRI => {
-                let t = &self.tris[i];
-                if t.uvs == u32::MAX {
+                let Some(uv) = self.corner_uvs(&self.corners[i]) else {
                     return Vec2::new(a, b);
-                }
-                let uv = &self.tri_uvs[t.uvs as usize];
+                };
                 (1.0 - a - b) * uv[0] + a * uv[1] + b * uv[2]
             }
             KIND_SPHERE => {
