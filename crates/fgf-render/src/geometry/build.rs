@@ -2,7 +2,7 @@
 //! area-sampling tables, then the BVH and the leaf packs in its order.
 
 use super::bvh::{Aabb, Bvh};
-use super::pack::TriPack;
+use super::pack::{PackMasks, TriPack};
 use super::types::{
     Corners, Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI, PAD,
 };
@@ -344,10 +344,10 @@ impl Builder {
             .iter()
             .map(|i| i.map_or(PAD, |i| self.prims[i as usize]))
             .collect();
-        let packs: Vec<TriPack> = prims
+        let (packs, pack_masks): (Vec<TriPack>, Vec<PackMasks>) = prims
             .chunks(super::bvh::PACK)
             .map(|chunk| TriPack::new(chunk, &self.tris))
-            .collect();
+            .unzip();
         // What queries and hits read, scattered (the BVH advises its own).
         crate::huge::advise(&packs);
         crate::huge::advise(&prims);
@@ -366,6 +366,7 @@ impl Builder {
             disks: self.disks,
             prims,
             packs,
+            pack_masks,
             bvh,
             sampling: self.sampling,
             areas: self.areas,

@@ -42,7 +42,7 @@ pub use types::{Hit, HitRecord, PositionSample};
 
 use bvh::Bvh;
 use glam::{Mat3, Vec2, Vec3, Vec3A};
-use pack::TriPack;
+use pack::{PackMasks, TriPack};
 use types::{Corners, Disk, ShapeSampling, Sphere, Tri};
 
 /// All surfaces of a scene and their acceleration structure.
@@ -67,6 +67,8 @@ pub struct Geometry {
     prims: Vec<u32>,
     /// `packs[k]` holds the triangles among `prims[8k..8k+8]` for 8-wide tests.
     packs: Vec<TriPack>,
+    /// `pack_masks[k]`: which lanes of `packs[k]` hold what.
+    pack_masks: Vec<PackMasks>,
     bvh: Bvh,
     sampling: Vec<ShapeSampling>,
     /// Surface area of each shape, world space.

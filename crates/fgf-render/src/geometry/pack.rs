@@ -16,35 +16,40 @@ use crate::ray::Ray;
 /// ray. Lanes without a triangle have `N = 0`, so `t` is NaN and they never
 /// hit.
 ///
-/// The layout is fixed (`repr(C)`): the masks, which a leaf test reads
-/// first, share the first cache line with the start of the vertices, and
-/// a pack fills 7 whole lines (64-byte aligned), read in their order.
+/// Which lanes hold what ([`PackMasks`]) is kept apart, in a small array
+/// that stays in cache: a pack is its 12 vectors, 6 whole cache lines
+/// (64-byte aligned). Every byte less counts on large meshes, whose packs
+/// outgrow the last-level cache (`docs/benchmarks.md`).
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
 pub(super) struct TriPack {
-    /// Lanes holding triangles / other primitives (spheres, disks).
-    pub(super) tri_mask: u32,
-    pub(super) other_mask: u32,
     v0: [F8; 3],
     n: [F8; 3],
     a: [F8; 3],
     b: [F8; 3],
-    /// Per lane: 1 for a triangle (`u + v ≤ 1`), 0 for a parallelogram
-    /// (`v ≤ 1`); `u ≤ 1` is tested for both.
-    tri_k: F8,
+}
+
+/// The lanes of a [`TriPack`]: those holding triangles or parallelograms
+/// (`tri`), other primitives (spheres, disks: `other`), and among `tri`
+/// the parallelograms (`quad`: tested for `v ≤ 1` instead of `u + v ≤ 1`;
+/// `u ≤ 1` is tested for both).
+#[derive(Debug, Clone, Copy, Default)]
+pub(super) struct PackMasks {
+    pub(super) tri: u8,
+    pub(super) other: u8,
+    quad: u8,
 }
 
 impl TriPack {
     /// The pack of the (up to) 8 primitive references `chunk`: its
     /// triangles (`tris` indexed by the references) go to the SIMD lanes,
     /// spheres and disks are only flagged, padding is left empty.
-    pub(super) fn new(chunk: &[u32], tris: &[Tri]) -> TriPack {
+    pub(super) fn new(chunk: &[u32], tris: &[Tri]) -> (TriPack, PackMasks) {
         let mut v0 = [[0f32; PACK]; 3];
         let mut n = [[0f32; PACK]; 3];
         let mut a = [[0f32; PACK]; 3];
         let mut b = [[0f32; PACK]; 3];
-        let (mut tri_mask, mut other_mask) = (0u32, 0u32);
-        let mut tri_k = [1f32; PACK];
+        let mut m = PackMasks::default();
         for (lane, &p) in chunk.iter().enumerate() {
             if p == PAD {
                 continue;
@@ -63,31 +68,30 @@ impl TriPack {
                     b[k][lane] = tb[k] as f32;
                 }
                 if t.quad {
-                    tri_k[lane] = 0.0;
+                    m.quad |= 1 << lane;
                 }
-                tri_mask |= 1 << lane;
+                m.tri |= 1 << lane;
             } else {
-                other_mask |= 1 << lane;
+                m.other |= 1 << lane;
             }
         }
         let v = |a: [[f32; PACK]; 3]| a.map(F8::from_array);
-        TriPack {
+        let pack = TriPack {
             v0: v(v0),
             n: v(n),
             a: v(a),
             b: v(b),
-            tri_k: F8::from_array(tri_k),
-            tri_mask,
-            other_mask,
-        }
+        };
+        (pack, m)
     }
 
-    /// The 8 triangles against one ray: the mask of triangle lanes hit
-    /// with `0 < t < t_max` (with `TIES`, `0 < t <= t_max`), and every
-    /// lane's `t`, `u`, `v`.
+    /// The 8 triangles (the lanes of `m`) against one ray: the mask of
+    /// triangle lanes hit with `0 < t < t_max` (with `TIES`,
+    /// `0 < t <= t_max`), and every lane's `t`, `u`, `v`.
     #[inline(always)]
     pub(super) fn hits<const TIES: bool>(
         &self,
+        m: PackMasks,
         o: [F8; 3],
         d: [F8; 3],
         t_max: f32,
@@ -110,14 +114,18 @@ impl TriPack {
             .le(u)
             .and(zero.le(v))
             .and(u.le(one))
-            .and(u.mul(self.tri_k).add(v).le(one))
             .and(zero.lt(t))
             .and(if TIES {
                 t.le(F8::splat(t_max))
             } else {
                 t.lt(F8::splat(t_max))
-            });
-        (ok.bitmask() & self.tri_mask, t, u, v)
+            })
+            .bitmask();
+        // The last edge: `u + v ≤ 1` for triangles, `v ≤ 1` for
+        // parallelograms.
+        let (quad, tri) = (u32::from(m.quad), u32::from(m.tri));
+        let edge = (u.add(v).le(one).bitmask() & !quad) | (v.le(one).bitmask() & quad);
+        (ok & edge & tri, t, u, v)
     }
 }
 

@@ -40,9 +40,10 @@ impl Geometry {
         let end = start + count;
         let mut k = start;
         while k < end {
-            let pack = &self.packs[(k / PACK as u32) as usize];
-            if pack.tri_mask != 0 {
-                let (mut mask, t, u, v) = pack.hits::<TIES>(od.0, od.1, *t_max);
+            let i = (k / PACK as u32) as usize;
+            let m = self.pack_masks[i];
+            if m.tri != 0 {
+                let (mut mask, t, u, v) = self.packs[i].hits::<TIES>(m, od.0, od.1, *t_max);
                 if mask != 0 {
                     let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
                     while mask != 0 {
@@ -58,7 +59,7 @@ impl Geometry {
                     }
                 }
             }
-            let mut other = pack.other_mask;
+            let mut other = u32::from(m.other);
             while other != 0 {
                 let lane = other.trailing_zeros();
                 other &= other - 1;

@@ -116,7 +116,7 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
         let mut want: Option<(f32, u32)> = None;
         let mut count = 0;
         for (i, pack) in g.packs.iter().enumerate() {
-            let (mask, t, _, _) = pack.hits::<false>(od.0, od.1, t_max);
+            let (mask, t, _, _) = pack.hits::<false>(g.pack_masks[i], od.0, od.1, t_max);
             for l in 0..super::bvh::PACK {
                 if mask & (1 << l) != 0 {
                     count += 1;
