@@ -4,7 +4,8 @@
 use super::bvh::{Aabb, Bvh};
 use super::pack::{PackMasks, TriPack};
 use super::types::{
-    Corners, Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI, PAD,
+    Corners, Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE,
+    KIND_TRI, PAD,
 };
 use super::uv::cube_uv;
 use super::Geometry;
@@ -219,7 +220,8 @@ impl Builder {
         // meshes before; normals and uvs where the mesh has them (as many
         // as it has, up to its vertex count), else zero.
         let base = self.positions.len() as u32;
-        self.positions.extend(wp.iter().map(|&p| glam::Vec3::from(p)));
+        self.positions
+            .extend(wp.iter().map(|&p| glam::Vec3::from(p)));
         let n_normals = wn.as_ref().map_or(0, |w| w.len().min(pos.len()));
         if n_normals > 0 || !self.normals.is_empty() {
             self.normals.resize(base as usize, glam::Vec3::ZERO);

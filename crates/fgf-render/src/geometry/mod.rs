@@ -76,17 +76,27 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    // (The three corners written out: `array::map` is not always inlined.)
+
+    /// The positions of a triangle's corners.
+    #[inline(always)]
+    fn corner_positions(&self, c: &Corners) -> [Vec3A; 3] {
+        let p = |k: u32| Vec3A::from(self.positions[k as usize]);
+        [p(c.v[0]), p(c.v[1]), p(c.v[2])]
+    }
+
     /// The normals at a triangle's corners, if its mesh has them.
     #[inline(always)]
     fn corner_normals(&self, c: &Corners) -> Option<[Vec3A; 3]> {
-        c.has_normals()
-            .then(|| c.v.map(|k| Vec3A::from(self.normals[k as usize])))
+        let n = |k: u32| Vec3A::from(self.normals[k as usize]);
+        c.has_normals().then(|| [n(c.v[0]), n(c.v[1]), n(c.v[2])])
     }
 
     /// The texture coordinates at a triangle's corners, if its mesh has
     /// them.
     #[inline(always)]
     fn corner_uvs(&self, c: &Corners) -> Option<[Vec2; 3]> {
-        c.has_uvs().then(|| c.v.map(|k| self.uvs[k as usize]))
+        let uv = |k: u32| self.uvs[k as usize];
+        c.has_uvs().then(|| [uv(c.v[0]), uv(c.v[1]), uv(c.v[2])])
     }
 }

@@ -119,13 +119,19 @@ impl TriPack {
                 t.le(F8::splat(t_max))
             } else {
                 t.lt(F8::splat(t_max))
-            })
-            .bitmask();
+            });
         // The last edge: `u + v ≤ 1` for triangles, `v ≤ 1` for
-        // parallelograms.
+        // parallelograms; packs of one kind (nearly all) test only theirs.
         let (quad, tri) = (u32::from(m.quad), u32::from(m.tri));
-        let edge = (u.add(v).le(one).bitmask() & !quad) | (v.le(one).bitmask() & quad);
-        (ok & edge & tri, t, u, v)
+        let (sum, v_edge) = (|| u.add(v).le(one), || v.le(one));
+        let hit = if quad == 0 {
+            ok.and(sum()).bitmask()
+        } else if quad == tri {
+            ok.and(v_edge()).bitmask()
+        } else {
+            ok.bitmask() & ((sum().bitmask() & !quad) | (v_edge().bitmask() & quad))
+        };
+        (hit & tri, t, u, v)
     }
 }
 

@@ -260,7 +260,7 @@ impl Geometry {
                 // From the corners, not the (larger) `Tri`: the same
                 // operations as the build's, so the same bits.
                 let c = &self.corners[i];
-                let [v0, a, b] = c.v.map(|k| Vec3A::from(self.positions[k as usize]));
+                let [v0, a, b] = self.corner_positions(c);
                 let (e1, e2) = (a - v0, b - v0);
                 let n = e1.cross(e2).normalize();
                 let n = if c.flip() { -n } else { n };
