@@ -657,3 +657,95 @@ fn beam_gives_each_ray_its_own_nearest_hit() {
     assert!(hits > 10_000, "too few hits to test anything: {hits}");
     assert!(ties > 3000, "too few ties to test the rule: {ties}");
 }
+
+/// Hits read their vertices, normals and texture coordinates through the
+/// per-triangle corners and the shared vertex arrays: with several meshes
+/// (offsets into those arrays), meshes with and without normals and uvs,
+/// fewer normals than vertices, a mirrored transform and flipped normals,
+/// every hit gets what its own mesh's data say.
+#[test]
+fn hits_read_their_own_mesh_vertex_data() {
+    let mut s = crate::math::Sampler::new(5, 0, 0);
+    let quad = |z: f32| {
+        vec![
+            Vec3::new(-1.0, -1.0, z),
+            Vec3::new(1.0, -1.0, z),
+            Vec3::new(1.0, 1.0, z),
+            Vec3::new(-1.0, 1.0, z),
+        ]
+    };
+    let idx = vec![[0, 1, 2], [0, 2, 3]];
+    let normals: Vec<Vec3> = (0..4)
+        .map(|k| Vec3::new(0.1 * k as f32, -0.2, 1.0).normalize())
+        .collect();
+    let uvs: Vec<Vec2> = (0..4)
+        .map(|k| Vec2::new(0.25 * k as f32, 1.0 - 0.5 * k as f32))
+        .collect();
+    let mesh = |z, n: Option<Vec<Vec3>>, t: Option<Vec<Vec2>>| {
+        GeometryDesc::Mesh(Arc::new(TriangleMesh {
+            positions: quad(z),
+            normals: n,
+            texcoords: t,
+            indices: idx.clone(),
+        }))
+    };
+    let mirror = Mat4::from_scale(Vec3::new(-1.0, 1.0, 1.0));
+    let mut flipped = plain_shape(mesh(2.0, Some(normals[..3].to_vec()), None), Mat4::IDENTITY);
+    flipped.flip_normals = true;
+    let shapes = [
+        plain_shape(mesh(0.0, None, None), Mat4::IDENTITY),
+        plain_shape(mesh(1.0, Some(normals.clone()), Some(uvs.clone())), mirror),
+        flipped,
+        plain_shape(mesh(3.0, None, Some(uvs.clone())), Mat4::IDENTITY),
+    ];
+    let g = Geometry::build(&shapes).unwrap();
+    for _ in 0..400 {
+        let (x, y) = (1.8 * s.next_1d() - 0.9, 1.8 * s.next_1d() - 0.9);
+        for (k, z) in [0.0f32, 1.0, 2.0, 3.0].into_iter().enumerate() {
+            let ray = Ray {
+                o: Vec3A::new(x, y, z - 0.5),
+                d: Vec3A::Z,
+            };
+            let h = g.intersect(&ray, 1.0).expect("the quad in front");
+            assert_eq!(h.shape, k as u32);
+            assert!((h.p - Vec3A::new(x, y, z)).length() < 1e-5);
+            // Barycentrics of the hit triangle, from the mesh's own data.
+            let [u, v] = h.bary;
+            // (Shape 1 is mirrored in x: its local point is (-x, y).)
+            let xl = if k == 1 { -x } else { x };
+            let t = idx[if xl >= y { 0 } else { 1 }];
+            let at = |a: [Vec3; 3]| (1.0 - u - v) * a[0] + u * a[1] + v * a[2];
+            let corner = |data: &[Vec3]| [0, 1, 2].map(|c| data[t[c] as usize]);
+            // Mirrored (1) and flipped (2): facing -z.
+            let want_n = if k == 1 || k == 2 { -Vec3::Z } else { Vec3::Z };
+            assert!(
+                (Vec3::from(h.n) - want_n).length() < 1e-6,
+                "shape {k}: n {:?}",
+                h.n
+            );
+            let want_ns = match k {
+                1 => {
+                    let m = Mat3::from_mat4(mirror).inverse().transpose();
+                    at(corner(&normals).map(|n| (m * n).normalize())).normalize()
+                }
+                // Normals for the first three vertices only: triangles
+                // using the fourth have none, as before.
+                2 if t.iter().all(|&i| i < 3) => -at(corner(&normals)).normalize(),
+                _ => want_n,
+            };
+            assert!(
+                (Vec3::from(h.ns) - want_ns).length() < 1e-5,
+                "shape {k}: ns {:?} vs {want_ns:?}",
+                h.ns
+            );
+            let want_uv = match k {
+                1 | 3 => {
+                    let c = [0, 1, 2].map(|c| uvs[t[c] as usize]);
+                    (1.0 - u - v) * c[0] + u * c[1] + v * c[2]
+                }
+                _ => Vec2::new(u, v),
+            };
+            assert!((g.uv(&h) - want_uv).length() < 1e-6, "shape {k}: uv");
+        }
+    }
+}
