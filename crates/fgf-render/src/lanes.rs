@@ -152,6 +152,16 @@ mod avx {
         pub fn neg(self) -> F8 {
             F8(unsafe { _mm256_xor_ps(self.0, _mm256_set1_ps(-0.0)) })
         }
+        /// The lanes whose sign bit is set (`-0.0` and negative NaNs
+        /// included).
+        #[inline(always)]
+        pub fn sign_mask(self) -> M8 {
+            M8(
+                unsafe {
+                    _mm256_castsi256_ps(_mm256_srai_epi32::<31>(_mm256_castps_si256(self.0)))
+                },
+            )
+        }
         /// `self` with the sign of `sign`.
         #[inline(always)]
         pub fn copysign(self, sign: F8) -> F8 {
@@ -551,6 +561,11 @@ mod portable {
             F8::from_array(self.to_array().map(|x| -x))
         }
         #[inline(always)]
+        pub fn sign_mask(self) -> M8 {
+            let a = self.to_array();
+            M8::from_fn(|l| a[l].is_sign_negative())
+        }
+        #[inline(always)]
         pub fn copysign(self, sign: F8) -> F8 {
             let (a, b) = (self.to_array(), sign.to_array());
             F8::from_array(std::array::from_fn(|l| a[l].copysign(b[l])))
@@ -782,6 +797,7 @@ mod tests {
             assert_eq!(bits(fa.div(fb).to_array()), bits(pa.div(pb).to_array()));
             assert_eq!(bits(fa.sqrt().to_array()), bits(pa.sqrt().to_array()));
             assert_eq!(fa.le(fb).bitmask(), pa.le(pb).bitmask());
+            assert_eq!(fa.sign_mask().bitmask(), pa.sign_mask().bitmask());
             assert_eq!(fa.lt(fb).bitmask(), pa.lt(pb).bitmask());
             let (m, pm) = (fa.le(fb).and(fb.lt(fa)), pa.le(pb).and(pb.lt(pa)));
             assert_eq!(m.bitmask(), pm.bitmask());

@@ -2,7 +2,7 @@
 //! area-sampling tables, then the BVH and the leaf packs in its order.
 
 use super::bvh::{Aabb, Bvh};
-use super::pack::{PackMasks, TriPack};
+use super::pack::TriPack;
 use super::types::{
     Corners, Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE,
     KIND_TRI, PAD,
@@ -346,10 +346,13 @@ impl Builder {
             .iter()
             .map(|i| i.map_or(PAD, |i| self.prims[i as usize]))
             .collect();
-        let (packs, pack_masks): (Vec<TriPack>, Vec<PackMasks>) = prims
+        let (packs, mut pack_other): (Vec<TriPack>, Vec<u8>) = prims
             .chunks(super::bvh::PACK)
             .map(|chunk| TriPack::new(chunk, &self.tris))
             .unzip();
+        if pack_other.iter().all(|&o| o == 0) {
+            pack_other = Vec::new();
+        }
         // What queries and hits read, scattered (the BVH advises its own).
         crate::huge::advise(&packs);
         crate::huge::advise(&prims);
@@ -358,6 +361,7 @@ impl Builder {
         crate::huge::advise(&self.normals);
         crate::huge::advise(&self.uvs);
         Geometry {
+            small: self.tris.len() <= Geometry::SMALL,
             tris: self.tris,
             corners: self.corners,
             positions: self.positions,
@@ -368,7 +372,7 @@ impl Builder {
             disks: self.disks,
             prims,
             packs,
-            pack_masks,
+            pack_other,
             bvh,
             sampling: self.sampling,
             areas: self.areas,

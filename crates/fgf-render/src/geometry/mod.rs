@@ -42,7 +42,7 @@ pub use types::{Hit, HitRecord, PositionSample};
 
 use bvh::Bvh;
 use glam::{Mat3, Vec2, Vec3, Vec3A};
-use pack::{PackMasks, TriPack};
+use pack::TriPack;
 use types::{Corners, Disk, ShapeSampling, Sphere, Tri};
 
 /// All surfaces of a scene and their acceleration structure.
@@ -50,6 +50,10 @@ pub struct Geometry {
     tris: Vec<Tri>,
     /// Per triangle (as `tris`), its vertices and flags: what hits read.
     corners: Vec<Corners>,
+    /// Few triangles ([`Geometry::SMALL`] or fewer): hits read the `Tri`
+    /// records, which then stay in cache, rather than compute from the
+    /// corners what the records hold (some 40 instructions per hit).
+    small: bool,
     /// The vertices of all meshes, world space (12-byte `Vec3`s), and
     /// where a mesh has them, their normals and texture coordinates (same
     /// indices; zero for the vertices of meshes without, and empty while
@@ -67,8 +71,9 @@ pub struct Geometry {
     prims: Vec<u32>,
     /// `packs[k]` holds the triangles among `prims[8k..8k+8]` for 8-wide tests.
     packs: Vec<TriPack>,
-    /// `pack_masks[k]`: which lanes of `packs[k]` hold what.
-    pack_masks: Vec<PackMasks>,
+    /// `pack_other[k]`: the lanes of `packs[k]` that hold spheres or
+    /// disks (empty if no pack has any).
+    pack_other: Vec<u8>,
     bvh: Bvh,
     sampling: Vec<ShapeSampling>,
     /// Surface area of each shape, world space.
@@ -76,6 +81,10 @@ pub struct Geometry {
 }
 
 impl Geometry {
+    /// The most triangles for which hits read the `Tri` records (256 KiB
+    /// of them, a quarter of a 1 MiB L2).
+    const SMALL: usize = 256 * 1024 / std::mem::size_of::<Tri>();
+
     // (The three corners written out: `array::map` is not always inlined.)
 
     /// The positions of a triangle's corners.

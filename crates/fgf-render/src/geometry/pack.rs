@@ -16,10 +16,14 @@ use crate::ray::Ray;
 /// ray. Lanes without a triangle have `N = 0`, so `t` is NaN and they never
 /// hit.
 ///
-/// Which lanes hold what ([`PackMasks`]) is kept apart, in a small array
-/// that stays in cache: a pack is its 12 vectors, 6 whole cache lines
-/// (64-byte aligned). Every byte less counts on large meshes, whose packs
-/// outgrow the last-level cache (`docs/benchmarks.md`).
+/// A pack is its 12 vectors, 6 whole cache lines (64-byte aligned): every
+/// byte less counts on large meshes, whose packs outgrow the last-level
+/// cache (`docs/benchmarks.md`). Parallelograms (tested for `v ≤ 1`
+/// instead of `u + v ≤ 1`; `u ≤ 1` is tested for both) are marked by the
+/// sign bit of `N.x`: `N` is stored as `±N`, which changes no bit of `t`
+/// (both dot products change sign, exactly), with the sign bit of `N.x`
+/// set for parallelograms and clear for triangles. Which lanes hold
+/// spheres or disks is kept apart ([`TriPack::new`]).
 #[derive(Debug, Clone, Copy)]
 #[repr(C, align(64))]
 pub(super) struct TriPack {
@@ -29,27 +33,17 @@ pub(super) struct TriPack {
     b: [F8; 3],
 }
 
-/// The lanes of a [`TriPack`]: those holding triangles or parallelograms
-/// (`tri`), other primitives (spheres, disks: `other`), and among `tri`
-/// the parallelograms (`quad`: tested for `v ≤ 1` instead of `u + v ≤ 1`;
-/// `u ≤ 1` is tested for both).
-#[derive(Debug, Clone, Copy, Default)]
-pub(super) struct PackMasks {
-    pub(super) tri: u8,
-    pub(super) other: u8,
-    quad: u8,
-}
-
 impl TriPack {
     /// The pack of the (up to) 8 primitive references `chunk`: its
     /// triangles (`tris` indexed by the references) go to the SIMD lanes,
-    /// spheres and disks are only flagged, padding is left empty.
-    pub(super) fn new(chunk: &[u32], tris: &[Tri]) -> (TriPack, PackMasks) {
+    /// spheres and disks only to the returned mask of their lanes, padding
+    /// is left empty.
+    pub(super) fn new(chunk: &[u32], tris: &[Tri]) -> (TriPack, u8) {
         let mut v0 = [[0f32; PACK]; 3];
         let mut n = [[0f32; PACK]; 3];
         let mut a = [[0f32; PACK]; 3];
         let mut b = [[0f32; PACK]; 3];
-        let mut m = PackMasks::default();
+        let mut other = 0u8;
         for (lane, &p) in chunk.iter().enumerate() {
             if p == PAD {
                 continue;
@@ -67,12 +61,15 @@ impl TriPack {
                     a[k][lane] = ta[k] as f32;
                     b[k][lane] = tb[k] as f32;
                 }
-                if t.quad {
-                    m.quad |= 1 << lane;
+                // The sign bit of N.x: set for parallelograms (see above).
+                let flip = (n[0][lane].is_sign_negative()) != t.quad;
+                if flip {
+                    for k in 0..3 {
+                        n[k][lane] = -n[k][lane];
+                    }
                 }
-                m.tri |= 1 << lane;
             } else {
-                m.other |= 1 << lane;
+                other |= 1 << lane;
             }
         }
         let v = |a: [[f32; PACK]; 3]| a.map(F8::from_array);
@@ -82,16 +79,15 @@ impl TriPack {
             a: v(a),
             b: v(b),
         };
-        (pack, m)
+        (pack, other)
     }
 
-    /// The 8 triangles (the lanes of `m`) against one ray: the mask of
-    /// triangle lanes hit with `0 < t < t_max` (with `TIES`,
-    /// `0 < t <= t_max`), and every lane's `t`, `u`, `v`.
+    /// The 8 triangles against one ray: the mask of triangle lanes hit
+    /// with `0 < t < t_max` (with `TIES`, `0 < t <= t_max`), and every
+    /// lane's `t`, `u`, `v`.
     #[inline(always)]
     pub(super) fn hits<const TIES: bool>(
         &self,
-        m: PackMasks,
         o: [F8; 3],
         d: [F8; 3],
         t_max: f32,
@@ -121,17 +117,9 @@ impl TriPack {
                 t.lt(F8::splat(t_max))
             });
         // The last edge: `u + v ≤ 1` for triangles, `v ≤ 1` for
-        // parallelograms; packs of one kind (nearly all) test only theirs.
-        let (quad, tri) = (u32::from(m.quad), u32::from(m.tri));
-        let (sum, v_edge) = (|| u.add(v).le(one), || v.le(one));
-        let hit = if quad == 0 {
-            ok.and(sum()).bitmask()
-        } else if quad == tri {
-            ok.and(v_edge()).bitmask()
-        } else {
-            ok.bitmask() & ((sum().bitmask() & !quad) | (v_edge().bitmask() & quad))
-        };
-        (hit & tri, t, u, v)
+        // parallelograms (the sign bit of N.x).
+        let edge = self.n[0].sign_mask().select(v, u.add(v));
+        (ok.and(edge.le(one)).bitmask(), t, u, v)
     }
 }
 

@@ -41,25 +41,24 @@ impl Geometry {
         let mut k = start;
         while k < end {
             let i = (k / PACK as u32) as usize;
-            let m = self.pack_masks[i];
-            if m.tri != 0 {
-                let (mut mask, t, u, v) = self.packs[i].hits::<TIES>(m, od.0, od.1, *t_max);
-                if mask != 0 {
-                    let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
-                    while mask != 0 {
-                        let l = mask.trailing_zeros() as usize;
-                        mask &= mask - 1;
-                        // A lane may have been overtaken by an earlier one.
-                        if t[l] < *t_max || (TIES && t[l] == *t_max) {
-                            *t_max = f(self.prims[k as usize + l], t[l], u[l], v[l]);
-                            if *t_max < 0.0 {
-                                return false;
-                            }
+            // (Lanes of spheres, disks and padding hold N = 0: never hit.)
+            let (mut mask, t, u, v) = self.packs[i].hits::<TIES>(od.0, od.1, *t_max);
+            if mask != 0 {
+                let (t, u, v) = (t.to_array(), u.to_array(), v.to_array());
+                while mask != 0 {
+                    let l = mask.trailing_zeros() as usize;
+                    mask &= mask - 1;
+                    // A lane may have been overtaken by an earlier one.
+                    if t[l] < *t_max || (TIES && t[l] == *t_max) {
+                        *t_max = f(self.prims[k as usize + l], t[l], u[l], v[l]);
+                        if *t_max < 0.0 {
+                            return false;
                         }
                     }
                 }
             }
-            let mut other = u32::from(m.other);
+            // (Empty in scenes of triangles and parallelograms only.)
+            let mut other = self.pack_other.get(i).map_or(0, |&o| u32::from(o));
             while other != 0 {
                 let lane = other.trailing_zeros();
                 other &= other - 1;
@@ -257,13 +256,19 @@ impl Geometry {
         let i = (prim & INDEX_MASK) as usize;
         match prim >> KIND_SHIFT {
             KIND_TRI => {
-                // From the corners, not the (larger) `Tri`: the same
-                // operations as the build's, so the same bits.
                 let c = &self.corners[i];
-                let [v0, a, b] = self.corner_positions(c);
-                let (e1, e2) = (a - v0, b - v0);
-                let n = e1.cross(e2).normalize();
-                let n = if c.flip() { -n } else { n };
+                let (v0, e1, e2, n) = if self.small {
+                    // A few triangles (their records stay in cache): read.
+                    let tri = &self.tris[i];
+                    (tri.v0, tri.e1, tri.e2, tri.n)
+                } else {
+                    // Many: from the corners, not the (larger) `Tri`, by
+                    // the same operations as the build's: the same bits.
+                    let [v0, a, b] = self.corner_positions(c);
+                    let (e1, e2) = (a - v0, b - v0);
+                    let n = e1.cross(e2).normalize();
+                    (v0, e1, e2, if c.flip() { -n } else { n })
+                };
                 let ns = match self.corner_normals(c) {
                     Some(vn) => {
                         let s = (1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2];

@@ -116,7 +116,7 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
         let mut want: Option<(f32, u32)> = None;
         let mut count = 0;
         for (i, pack) in g.packs.iter().enumerate() {
-            let (mask, t, _, _) = pack.hits::<false>(g.pack_masks[i], od.0, od.1, t_max);
+            let (mask, t, _, _) = pack.hits::<false>(od.0, od.1, t_max);
             for l in 0..super::bvh::PACK {
                 if mask & (1 << l) != 0 {
                     count += 1;
@@ -699,6 +699,23 @@ fn hits_read_their_own_mesh_vertex_data() {
         plain_shape(mesh(3.0, None, Some(uvs.clone())), Mat4::IDENTITY),
     ];
     let g = Geometry::build(&shapes).unwrap();
+    // The same scene with hits made from the corners (as for large meshes)
+    // rather than read from the `Tri` records: the same bits.
+    let mut from_corners = Geometry::build(&shapes).unwrap();
+    assert!(g.small);
+    from_corners.small = false;
+    let bits = |h: &Hit| {
+        let v = |a: Vec3A| a.to_array().map(f32::to_bits);
+        (
+            h.t.to_bits(),
+            v(h.p),
+            v(h.n),
+            v(h.ns),
+            h.shape,
+            h.prim,
+            h.bary.map(f32::to_bits),
+        )
+    };
     for _ in 0..400 {
         let (x, y) = (1.8 * s.next_1d() - 0.9, 1.8 * s.next_1d() - 0.9);
         for (k, z) in [0.0f32, 1.0, 2.0, 3.0].into_iter().enumerate() {
@@ -707,6 +724,10 @@ fn hits_read_their_own_mesh_vertex_data() {
                 d: Vec3A::Z,
             };
             let h = g.intersect(&ray, 1.0).expect("the quad in front");
+            let h2 = from_corners
+                .intersect(&ray, 1.0)
+                .expect("the quad in front");
+            assert_eq!(bits(&h), bits(&h2), "shape {k}");
             assert_eq!(h.shape, k as u32);
             assert!((h.p - Vec3A::new(x, y, z)).length() < 1e-5);
             // Barycentrics of the hit triangle, from the mesh's own data.
@@ -748,4 +769,35 @@ fn hits_read_their_own_mesh_vertex_data() {
             assert!((g.uv(&h) - want_uv).length() < 1e-6, "shape {k}: uv");
         }
     }
+    // Parallelograms (a cube, a mirrored rectangle): both ways the same.
+    let shapes = [
+        plain_shape(
+            GeometryDesc::Cube,
+            Mat4::from_scale_rotation_translation(
+                Vec3::new(0.5, 0.7, 0.3),
+                glam::Quat::from_rotation_y(0.4),
+                Vec3::new(0.2, 0.1, 0.0),
+            ),
+        ),
+        plain_shape(
+            GeometryDesc::Rectangle,
+            Mat4::from_translation(Vec3::new(0.0, 0.0, -1.5)) * mirror,
+        ),
+    ];
+    let g = Geometry::build(&shapes).unwrap();
+    let mut from_corners = Geometry::build(&shapes).unwrap();
+    from_corners.small = false;
+    let mut n_hits = 0;
+    for _ in 0..2000 {
+        let o = crate::math::sample_uniform_sphere(s.next_2d()) * 3.0;
+        let d = (Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) - 0.5 - o).normalize();
+        let ray = Ray { o, d };
+        let (h, h2) = (
+            g.intersect(&ray, f32::INFINITY),
+            from_corners.intersect(&ray, f32::INFINITY),
+        );
+        assert_eq!(h.map(|h| bits(&h)), h2.map(|h| bits(&h)));
+        n_hits += usize::from(h.is_some());
+    }
+    assert!(n_hits > 1000, "{n_hits} hits");
 }
