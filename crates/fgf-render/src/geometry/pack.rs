@@ -62,10 +62,9 @@ impl TriPack {
                     b[k][lane] = tb[k] as f32;
                 }
                 // The sign bit of N.x: set for parallelograms (see above).
-                let flip = (n[0][lane].is_sign_negative()) != t.quad;
-                if flip {
-                    for k in 0..3 {
-                        n[k][lane] = -n[k][lane];
+                if n[0][lane].is_sign_negative() != t.quad {
+                    for nk in &mut n {
+                        nk[lane] = -nk[lane];
                     }
                 }
             } else {
