@@ -474,9 +474,10 @@ impl World {
 
     /// The nearest hits of the paths `live` whose next hit is not yet
     /// known, all walked before any is made into a [`Hit`]: each walk
-    /// starts the load of its hit triangle's record, and once all have
-    /// walked, the loads of their normals and texture coordinates start
-    /// together, so that these cache misses overlap with each other and
+    /// starts the load of what its hit reads first (the triangle's
+    /// corners), and once all have walked, the loads of their vertices,
+    /// normals and texture coordinates start together, so that these
+    /// cache misses overlap with each other and
     /// with the walks instead of stalling each path in turn. (The same
     /// hits as [`Self::path_advance`]'s own query, which scenes with
     /// `null` boundaries need and which [`Self::li_beam`] does not serve.)
