@@ -21,6 +21,26 @@ enum Faces<'a> {
     Quads(&'a [[u32; 4]]),
 }
 
+/// Give the vertices `base..end` of the geometry, a new mesh's, their
+/// entries in `dst`, one of its per-vertex arrays (normals, uvs): the
+/// mesh's `data` where it has them (as many as it has, up to its vertex
+/// count), zero for the rest and for earlier meshes without; nothing while
+/// no mesh has any. Returns how many of the mesh's vertices have data.
+fn extend_vertex_data<T: Copy + Default>(
+    dst: &mut Vec<T>,
+    base: usize,
+    end: usize,
+    data: Option<&[T]>,
+) -> usize {
+    let n = data.map_or(0, |d| d.len().min(end - base));
+    if n > 0 || !dst.is_empty() {
+        dst.resize(base, T::default());
+        dst.extend_from_slice(&data.unwrap_or_default()[..n]);
+        dst.resize(end, T::default());
+    }
+    n
+}
+
 /// The scale of `m` along x, and whether its linear part is a similarity
 /// (rotation and uniform scale), which a sphere's `to_world` must be for it
 /// to stay a sphere, as in Mitsuba.
@@ -211,34 +231,19 @@ impl Builder {
     ) {
         let wp: Vec<Vec3A> = pos.iter().map(|&p| m.transform_point3a(p.into())).collect();
         let nm = Mat3::from_mat4(*m).inverse().transpose();
-        let wn: Option<Vec<Vec3A>> = normals.map(|ns| {
+        let wn: Option<Vec<glam::Vec3>> = normals.map(|ns| {
             ns.iter()
-                .map(|&n| Vec3A::from(nm * n).normalize_or_zero() * sign)
+                .map(|&n| (Vec3A::from(nm * n).normalize_or_zero() * sign).into())
                 .collect()
         });
         // The vertices join the geometry's arrays after those of the
-        // meshes before; normals and uvs where the mesh has them (as many
-        // as it has, up to its vertex count), else zero.
+        // meshes before, with their normals and uvs.
         let base = self.positions.len() as u32;
         self.positions
             .extend(wp.iter().map(|&p| glam::Vec3::from(p)));
-        let n_normals = wn.as_ref().map_or(0, |w| w.len().min(pos.len()));
-        if n_normals > 0 || !self.normals.is_empty() {
-            self.normals.resize(base as usize, glam::Vec3::ZERO);
-            if let Some(wn) = &wn {
-                let wn = &wn[..n_normals];
-                self.normals.extend(wn.iter().map(|&n| glam::Vec3::from(n)));
-            }
-            self.normals.resize(self.positions.len(), glam::Vec3::ZERO);
-        }
-        let n_uvs = uvs.map_or(0, |uv| uv.len().min(pos.len()));
-        if n_uvs > 0 || !self.uvs.is_empty() {
-            self.uvs.resize(base as usize, Vec2::ZERO);
-            if let Some(uv) = uvs {
-                self.uvs.extend_from_slice(&uv[..n_uvs]);
-            }
-            self.uvs.resize(self.positions.len(), Vec2::ZERO);
-        }
+        let end = self.positions.len();
+        let n_normals = extend_vertex_data(&mut self.normals, base as usize, end, wn.as_deref());
+        let n_uvs = extend_vertex_data(&mut self.uvs, base as usize, end, uvs);
         let first = self.tris.len() as u32;
         let mut cdf = Vec::new();
         let mut total = 0.0f32;

@@ -101,6 +101,19 @@ impl Geometry {
         c.has_normals().then(|| [n(c.v[0]), n(c.v[1]), n(c.v[2])])
     }
 
+    /// The shading normal at barycentrics `[u, v]` of a triangle: its
+    /// vertex normals interpolated and normalised, else (no normals, or
+    /// they cancel) its geometric normal `n`.
+    #[inline(always)]
+    fn shading_normal(&self, c: &Corners, [u, v]: [f32; 2], n: Vec3A) -> Vec3A {
+        match self.corner_normals(c) {
+            Some(vn) => ((1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2])
+                .try_normalize()
+                .unwrap_or(n),
+            None => n,
+        }
+    }
+
     /// The texture coordinates at a triangle's corners, if its mesh has
     /// them.
     #[inline(always)]

@@ -4,7 +4,9 @@
 
 use super::bvh::{Aabb, Beam, BEAM, PACK};
 use super::pack::splat_ray;
-use super::types::{Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI};
+use super::types::{
+    Corners, Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI,
+};
 use super::Geometry;
 use crate::lanes::prefetch;
 use crate::ray::Ray;
@@ -117,27 +119,22 @@ impl Geometry {
     }
 
     /// Start loading what [`Self::make_hit`] reads first for `r`: the hit
-    /// triangle's [`Corners`](super::types::Corners). With [`Self::prefetch_shading`] once that
+    /// triangle's [`Corners`]. With [`Self::prefetch_shading`] once that
     /// has arrived, this lets the cache misses of several paths' hits
     /// overlap (`World::li_beam`).
     #[inline(always)]
-    pub fn prefetch_hit(&self, HitRecord((prim, ..)): &HitRecord) {
-        if prim >> KIND_SHIFT == KIND_TRI {
-            if let Some(c) = self.corners.get((prim & INDEX_MASK) as usize) {
-                prefetch(c);
-            }
+    pub fn prefetch_hit(&self, r: &HitRecord) {
+        if let Some(c) = self.hit_corners(r) {
+            prefetch(c);
         }
     }
 
     /// Start loading the rest of what [`Self::make_hit`] and
     /// [`Self::uv`] read for `r`: the hit triangle's vertices, their
-    /// normals and texture coordinates (its [`Corners`](super::types::Corners) are read here).
+    /// normals and texture coordinates (its [`Corners`] are read here).
     #[inline(always)]
-    pub fn prefetch_shading(&self, HitRecord((prim, ..)): &HitRecord) {
-        if prim >> KIND_SHIFT != KIND_TRI {
-            return;
-        }
-        let Some(c) = self.corners.get((prim & INDEX_MASK) as usize) else {
+    pub fn prefetch_shading(&self, r: &HitRecord) {
+        let Some(c) = self.hit_corners(r) else {
             return;
         };
         for k in c.v {
@@ -151,6 +148,15 @@ impl Geometry {
             if let (true, Some(uv)) = (c.has_uvs(), self.uvs.get(k)) {
                 prefetch(uv);
             }
+        }
+    }
+
+    /// The corners of the triangle hit in `r` (`None` for other primitives).
+    #[inline(always)]
+    fn hit_corners(&self, HitRecord((prim, ..)): &HitRecord) -> Option<&Corners> {
+        match prim >> KIND_SHIFT {
+            KIND_TRI => self.corners.get((prim & INDEX_MASK) as usize),
+            _ => None,
         }
     }
 
@@ -269,13 +275,7 @@ impl Geometry {
                     let n = e1.cross(e2).normalize();
                     (v0, e1, e2, if c.flip() { -n } else { n })
                 };
-                let ns = match self.corner_normals(c) {
-                    Some(vn) => {
-                        let s = (1.0 - u - v) * vn[0] + u * vn[1] + v * vn[2];
-                        s.try_normalize().unwrap_or(n)
-                    }
-                    None => n,
-                };
+                let ns = self.shading_normal(c, [u, v], n);
                 // The hit point from barycentrics is more accurate than o + t d.
                 Hit {
                     t,

@@ -50,12 +50,7 @@ impl Geometry {
                 } else {
                     sample_uniform_triangle(u)
                 };
-                let ns = if let Some(vn) = self.corner_normals(&self.corners[*first as usize + k]) {
-                    let n = (1.0 - b[0] - b[1]) * vn[0] + b[0] * vn[1] + b[1] * vn[2];
-                    n.try_normalize().unwrap_or(t.n)
-                } else {
-                    t.n
-                };
+                let ns = self.shading_normal(&self.corners[*first as usize + k], b, t.n);
                 (
                     PositionSample {
                         p: t.v0 + b[0] * t.e1 + b[1] * t.e2,
