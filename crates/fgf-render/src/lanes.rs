@@ -19,7 +19,9 @@
 //! Every operation is exact IEEE arithmetic on each lane, with no fused
 //! multiply–add, so a kernel written with these types gives each lane the
 //! bits of the scalar code that performs the same operations in the same
-//! order. Gathers clamp their indices to the table, so they read no memory
+//! order. The one exception, `F8::mul_sub_bound`, is fused where the build
+//! has FMA and is only for bounds proven either way (the tree's node test).
+//! Gathers clamp their indices to the table, so they read no memory
 //! outside it whatever the indices.
 //!
 //! The AVX2 intrinsics are `unsafe` to call even when the build enables
@@ -114,6 +116,16 @@ mod avx {
         #[inline(always)]
         pub fn mul(self, b: F8) -> F8 {
             F8(unsafe { _mm256_mul_ps(self.0, b.0) })
+        }
+        /// `self * b - c`, rounded once where the build has FMA, else
+        /// twice. Only for bounds whose proof allows either (the tree's
+        /// slab test), never where a lane must have the scalar code's bits.
+        #[inline(always)]
+        pub fn mul_sub_bound(self, b: F8, c: F8) -> F8 {
+            #[cfg(target_feature = "fma")]
+            return F8(unsafe { _mm256_fmsub_ps(self.0, b.0, c.0) });
+            #[cfg(not(target_feature = "fma"))]
+            return self.mul(b).sub(c);
         }
         /// Lane minimum; `b` if either is NaN.
         #[inline(always)]
@@ -516,6 +528,11 @@ mod portable {
         #[inline(always)]
         pub fn mul(self, b: F8) -> F8 {
             F8([self.0[0] * b.0[0], self.0[1] * b.0[1]])
+        }
+        /// `self * b - c`, rounded twice (see the AVX2 version).
+        #[inline(always)]
+        pub fn mul_sub_bound(self, b: F8, c: F8) -> F8 {
+            self.mul(b).sub(c)
         }
         /// Lane minimum; `b` if either is NaN: `minps` (glam's SSE `min`) on
         /// x86-64, written out elsewhere (NEON's `min` returns the NaN).

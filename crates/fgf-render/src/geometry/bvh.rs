@@ -202,6 +202,15 @@ impl Bvh {
             build_rec(bounds, &centroids, &mut order, 0, bounds.len(), &mut nodes);
         }
         let padded = pad_leaves(&mut nodes, &order);
+        // The tree is chosen on the primitives' own bounds, then every box
+        // grown by a few units in the last place: the bounds of a triangle
+        // are `v0 + e1` and `v0 + e2` rounded, which may lie inside the
+        // corners that its test (of `v0`, `e1`, `e2`) accepts by up to half
+        // a unit of the coordinates, more than the slab test's relative
+        // widening covers far from the origin (`docs/theory.md` §7.19).
+        for n in &mut nodes {
+            (n.min, n.max) = (widen_down(n.min), widen_up(n.max));
+        }
         let mut bvh = Bvh {
             nodes: Vec::with_capacity(nodes.len() / 2),
             root_leaf: (0, 0),
@@ -360,6 +369,47 @@ impl Bvh {
         t_max: f32,
         hit: &mut impl FnMut(u32, u32, f32) -> f32,
     ) -> f32 {
+        let p = o * inv_d;
+        if !p.is_finite() {
+            return self.walk_unfused::<ORDERED>(stack, o, inv_d, t_max, hit);
+        }
+        let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
+        let (q_near, q_far) = slab_offsets(p);
+        let (near, far) = slab_planes([inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0]);
+        let zero = F8::splat(0.0);
+        self.walk_with::<ORDERED>(
+            stack,
+            t_max,
+            #[inline(always)]
+            |b, t_max| {
+                // The slab test of `slab_hit` on 8 boxes, each distance one
+                // multiply–subtract `b·(1/d) − q` (`docs/theory.md` §7.19).
+                let tn = |a: usize| b[near[a]].mul_sub_bound(inv[a], q_near[a]);
+                let tf = |a: usize| b[far[a]].mul_sub_bound(inv[a], q_far[a]);
+                let tn = tn(0).max(tn(1).max(tn(2).max(zero)));
+                let tf = tf(0).min(tf(1).min(tf(2).min(F8::splat(t_max))));
+                (tn, tf)
+            },
+            hit,
+        )
+    }
+
+    /// [`Self::walk`] for a ray with a zero (or subnormal) direction
+    /// component, whose `o·(1/d)` is not finite: each distance computed as
+    /// `(b − o)·(1/d)`, which is an exact infinity of the right sign where
+    /// the origin lies off the slab's plane (the offsets of the fused form
+    /// would give NaN on one side of 0, and so cull nothing along that
+    /// axis).
+    #[cold]
+    #[inline(never)]
+    fn walk_unfused<const ORDERED: bool>(
+        &self,
+        stack: &mut [(u32, f32)],
+        o: Vec3A,
+        inv_d: Vec3A,
+        t_max: f32,
+        hit: &mut impl FnMut(u32, u32, f32) -> f32,
+    ) -> f32 {
         let o = [F8::splat(o.x), F8::splat(o.y), F8::splat(o.z)];
         let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
         let (near, far) = slab_planes([inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0]);
@@ -369,11 +419,9 @@ impl Bvh {
             t_max,
             #[inline(always)]
             |b, t_max| {
-                // The slab test of `slab_hit` on 8 boxes. A NaN distance (a
-                // zero direction component, the origin on a slab plane) is
-                // the first operand of `max`/`min`, which then return the
-                // second (see `F8`): that slab is ignored, a conservative
-                // hit.
+                // A NaN distance (the origin on a slab plane) is the first
+                // operand of `max`/`min`, which then return the second (see
+                // `F8`): that slab is ignored, a conservative hit.
                 let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
                 let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
                 let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
@@ -524,6 +572,34 @@ fn slab_planes(neg: [bool; 3]) -> ([usize; 3], [usize; 3]) {
     (
         [3 * nx as usize, 1 + 3 * ny as usize, 2 + 3 * nz as usize],
         [3 * !nx as usize, 1 + 3 * !ny as usize, 2 + 3 * !nz as usize],
+    )
+}
+
+/// `x` moved down by `2⁻²²·|x|` and the least normal float (at least one
+/// unit in its last place), where finite.
+fn widen_down(x: Vec3A) -> Vec3A {
+    let m = x.abs() * (1.0 / (1 << 22) as f32) + Vec3A::splat(f32::MIN_POSITIVE);
+    Vec3A::select(x.is_finite_mask(), x - m, x)
+}
+
+/// `x` moved up as [`widen_down`] moves it down.
+fn widen_up(x: Vec3A) -> Vec3A {
+    -widen_down(-x)
+}
+
+/// Per axis, the offsets `q` that turn a ray's distance to a slab plane
+/// `b` into one multiply–subtract `b·(1/d) − q` in [`Bvh::walk`], from
+/// `p = o·(1/d)` (finite): `p` moved by `2⁻²¹·|p|` and the least normal
+/// float, up for the planes the ray enters by and down for those it leaves
+/// by, so that the rounding of `p` and of the product `b·(1/d)` (when not
+/// fused) can only widen the slab (`docs/theory.md` §7.19).
+#[inline(always)]
+fn slab_offsets(p: Vec3A) -> ([F8; 3], [F8; 3]) {
+    let m = p.abs() * (1.0 / (1 << 21) as f32) + Vec3A::splat(f32::MIN_POSITIVE);
+    let (up, down) = (p + m, p - m);
+    (
+        [F8::splat(up.x), F8::splat(up.y), F8::splat(up.z)],
+        [F8::splat(down.x), F8::splat(down.y), F8::splat(down.z)],
     )
 }
 

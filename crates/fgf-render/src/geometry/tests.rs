@@ -79,28 +79,57 @@ fn packed_bvh_matches_brute_force() {
 /// nearest hit that testing every leaf pack finds (the same arithmetic, so
 /// the same distance and primitive), for random rays, rays along the axes
 /// (zero direction components) from the soup's vertices (origins on slab
-/// planes) and random `t_max`; the all-hits query finds as many hits.
+/// planes), rays in random directions from points on the triangles, and
+/// random `t_max`; the all-hits query finds as many hits. The soup lies
+/// near the origin, then 20,000 units away, where a ray's `o·(1/d)` is
+/// 10⁵ times its distances to the boxes and the node test's offsets must
+/// absorb its rounding (`docs/theory.md` §7.19).
 #[test]
 fn wide_bvh_matches_brute_force_on_large_soup() {
-    let mut s = crate::math::Sampler::new(13, 0, 0);
+    wide_bvh_matches_brute_force_at(Vec3::ZERO, 13);
+    wide_bvh_matches_brute_force_at(Vec3::new(2.0e4, -1.5e4, 1.2e4), 17);
+}
+
+fn wide_bvh_matches_brute_force_at(offset: Vec3, seed: u64) {
+    let mut s = crate::math::Sampler::new(seed, 0, 0);
     let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
-    let mesh = triangle_soup(&mut s, 5000, 0.2);
+    let mut mesh = (*triangle_soup(&mut s, 5000, 0.2)).clone();
+    for p in &mut mesh.positions {
+        *p += offset;
+    }
     let vertices = mesh.positions.clone();
-    let g = Geometry::build(&[plain_shape(GeometryDesc::Mesh(mesh), Mat4::IDENTITY)]).unwrap();
+    let g = Geometry::build(&[plain_shape(
+        GeometryDesc::Mesh(Arc::new(mesh)),
+        Mat4::IDENTITY,
+    )])
+    .unwrap();
     assert!(
         g.bvh.depth_bound() > 2 * 3,
         "the tree should be several levels deep"
     );
     let mut n_hits = 0;
-    for k in 0..4000 {
-        let (o, d) = if k % 2 == 0 {
-            let o = r3(&mut s) * 6.0 - Vec3::ONE;
-            (o, crate::math::sample_uniform_sphere(s.next_2d()).into())
-        } else {
-            let v = vertices[(s.next_1d() * vertices.len() as f32) as usize % vertices.len()];
-            let mut d = Vec3::ZERO;
-            d[k / 2 % 3] = if k / 6 % 2 == 0 { 1.0 } else { -1.0 };
-            (v - d * 0.5, d)
+    for k in 0..6000 {
+        let vertex = |s: &mut crate::math::Sampler| {
+            vertices[(s.next_1d() * vertices.len() as f32) as usize % vertices.len()]
+        };
+        let (o, d) = match k % 3 {
+            0 => {
+                let o = r3(&mut s) * 6.0 - Vec3::ONE + offset;
+                (o, crate::math::sample_uniform_sphere(s.next_2d()).into())
+            }
+            1 => {
+                let v = vertex(&mut s);
+                let mut d = Vec3::ZERO;
+                d[k / 3 % 3] = if k / 9 % 2 == 0 { 1.0 } else { -1.0 };
+                (v - d * 0.5, d)
+            }
+            _ => {
+                // A point of a triangle (between two of its vertices).
+                let i = 3 * (s.next_1d() * 5000.0) as usize % vertices.len();
+                let w = s.next_1d();
+                let o = vertices[i] * (1.0 - w) + vertices[i + 1] * w;
+                (o, crate::math::sample_uniform_sphere(s.next_2d()).into())
+            }
         };
         let ray = Ray {
             o: o.into(),
@@ -129,8 +158,8 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
         n_hits += count;
         let got = g.intersect(&ray, t_max).map(|h| (h.t, h.prim));
         match (got, want) {
-            (Some(a), Some(b)) => assert!(a.0 == b.0, "ray {k}: {a:?} vs {b:?}"),
-            (a, b) => assert_eq!(a, b, "ray {k}"),
+            (Some(a), Some(b)) => assert!(a.0 == b.0, "offset {offset}, ray {k}: {a:?} vs {b:?}"),
+            (a, b) => assert_eq!(a, b, "offset {offset}, ray {k}: {o} {d}"),
         }
         let mut all = 0;
         g.for_each_hit(&ray, t_max, |_, _, _, _| {
@@ -139,7 +168,7 @@ fn wide_bvh_matches_brute_force_on_large_soup() {
         });
         assert_eq!(all, count, "ray {k}");
     }
-    assert!(n_hits > 2000, "too few hits to test anything: {n_hits}");
+    assert!(n_hits > 3000, "too few hits to test anything: {n_hits}");
 }
 
 /// A scene of every primitive kind (a triangle soup, cubes and
