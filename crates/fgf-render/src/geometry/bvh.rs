@@ -72,13 +72,7 @@ impl Aabb {
     /// Slab test; returns the entry and exit distances clipped to `[0, t_max]`.
     #[inline]
     pub fn intersect(&self, o: Vec3A, inv_d: Vec3A, t_max: f32) -> Option<(f32, f32)> {
-        let t0 = glam::Vec3::from(self.min - o) * glam::Vec3::from(inv_d);
-        let t1 = glam::Vec3::from(self.max - o) * glam::Vec3::from(inv_d);
-        // `min`/`max` of glam's scalar `Vec3` ignore NaN operands the way we
-        // want when a direction component is 0 and the origin lies on a
-        // slab plane (those of the SIMD `Vec3A` would return them).
-        let tn = t0.min(t1).max_element().max(0.0);
-        let tf = t0.max(t1).min_element().min(t_max);
+        let (tn, tf) = slab_interval(self.min, self.max, o, inv_d, t_max);
         // The factor 1 + 2γ(3) (pbrt) makes the test conservative against
         // the rounding of the two products above.
         if tn <= tf * 1.000_000_4 {
@@ -603,15 +597,40 @@ fn slab_offsets(p: Vec3A) -> ([F8; 3], [F8; 3]) {
     )
 }
 
-/// The slab test of [`Aabb::intersect`] on SIMD vectors, hit or miss only.
+/// The distances at which the ray `o + t d` (`inv_d = d.recip()`) enters
+/// and leaves the box `[min, max]`, clipped to `[0, t_max]` (the box is
+/// missed if the first exceeds the second). Along an axis where the
+/// direction is 0 and the origin lies on one of the box's planes, a product
+/// `0·∞` is NaN, which fails both comparisons: the ray runs in the box's
+/// face, and that slab is ignored (a conservative hit).
 #[inline(always)]
-pub(super) fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
+fn slab_interval(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> (f32, f32) {
+    let neg = inv_d.cmplt(Vec3A::ZERO);
+    let t_in = (Vec3A::select(neg, max, min) - o) * inv_d;
+    let t_out = (Vec3A::select(neg, min, max) - o) * inv_d;
+    // A NaN lane is the first operand of `max`/`min`, which then return the
+    // second (`maxps`/`minps`; elsewhere glam's `f32::max`/`min`, which
+    // ignore NaN either way).
+    (
+        t_in.max(Vec3A::ZERO).max_element(),
+        t_out.min(Vec3A::splat(t_max)).min_element(),
+    )
+}
+
+/// The slab test of [`Aabb::intersect`], hit or miss only.
+#[inline(always)]
+fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
+    let (tn, tf) = slab_interval(min, max, o, inv_d, t_max);
+    !(tn > tf * 1.000_000_4)
+}
+
+/// [`slab_hit`] for a ray whose `inv_d` is finite (a beam's, see
+/// [`Beam::new`]), where no product is NaN: fewer instructions, for the
+/// test each ray of a beam makes per leaf.
+#[inline(always)]
+pub(super) fn slab_hit_finite(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
     let t0 = (min - o) * inv_d;
     let t1 = (max - o) * inv_d;
-    // Plain comparisons instead of f32::max/min: those handle NaN operands,
-    // which costs extra instructions in this innermost test; a NaN here (a
-    // zero direction component with the origin on a slab plane) makes the
-    // comparison false, i.e. a conservative hit.
     let tn = t0.min(t1).max_element();
     let tf = t0.max(t1).min_element();
     let tn = if tn > 0.0 { tn } else { 0.0 };
@@ -735,6 +754,36 @@ fn build_rec(
 
 #[cfg(test)]
 mod tests {
+    /// A ray with a zero direction component whose origin lies on one of
+    /// the box's planes along that axis touches the box's face: both slab
+    /// tests count it as a hit (the slab is ignored), on either plane and
+    /// for either sign of the zero; off the planes, inside the slab it
+    /// hits and outside it misses.
+    #[test]
+    fn slab_tests_ignore_a_slab_the_ray_runs_in() {
+        use super::{slab_hit, Aabb};
+        use glam::Vec3A;
+        let b = Aabb {
+            min: Vec3A::new(0.0, 0.0, 0.0),
+            max: Vec3A::new(1.0, 1.0, 1.0),
+        };
+        for (x, want) in [
+            (0.0, true),
+            (1.0, true),
+            (0.5, true),
+            (-0.5, false),
+            (1.5, false),
+        ] {
+            for zero in [0.0f32, -0.0] {
+                let o = Vec3A::new(x, 0.5, -1.0);
+                let inv = Vec3A::new(zero, 0.0, 1.0).recip();
+                let msg = format!("x {x}, zero {zero}");
+                assert_eq!(slab_hit(b.min, b.max, o, inv, f32::INFINITY), want, "{msg}");
+                assert_eq!(b.intersect(o, inv, f32::INFINITY).is_some(), want, "{msg}");
+            }
+        }
+    }
+
     use super::*;
 
     /// Every primitive whose box the ray crosses is visited (compared with

@@ -21,7 +21,7 @@
 //! exactly the same distance, both keep the least id, whatever order the
 //! leaves come in).
 
-use super::{slab_hit, slab_planes, Bvh, F8, PACK, STACK};
+use super::{slab_hit_finite, slab_planes, Bvh, F8, PACK, STACK};
 use crate::ray::Ray;
 use glam::Vec3A;
 
@@ -113,11 +113,12 @@ impl Bvh {
     /// Whether the ray `o + t d` (`inv_d = d.recip()`) may hit the box of
     /// the leaf starting at primitive `start` before `t_max`: the test a
     /// single ray makes before it visits the leaf, made by each ray of a
-    /// beam that visits it.
+    /// beam that visits it (whose `inv_d` is finite, as [`Beam::new`]
+    /// requires).
     #[inline(always)]
     pub fn leaf_may_hit(&self, start: u32, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
         let b = &self.leaf_boxes[start as usize / PACK];
-        slab_hit(b.min, b.max, o, inv_d, t_max)
+        slab_hit_finite(b.min, b.max, o, inv_d, t_max)
     }
 
     /// [`Bvh::walk`] for a beam: the same order and culling, with the
