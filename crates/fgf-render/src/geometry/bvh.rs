@@ -369,23 +369,11 @@ impl Bvh {
         }
         let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
         let (q_near, q_far) = slab_offsets(p);
-        let (near, far) = slab_planes([inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0]);
-        let zero = F8::splat(0.0);
-        self.walk_with::<ORDERED>(
-            stack,
-            t_max,
-            #[inline(always)]
-            |b, t_max| {
-                // The slab test of `slab_hit` on 8 boxes, each distance one
-                // multiply–subtract `b·(1/d) − q` (`docs/theory.md` §7.19).
-                let tn = |a: usize| b[near[a]].mul_sub_bound(inv[a], q_near[a]);
-                let tf = |a: usize| b[far[a]].mul_sub_bound(inv[a], q_far[a]);
-                let tn = tn(0).max(tn(1).max(tn(2).max(zero)));
-                let tf = tf(0).min(tf(1).min(tf(2).min(F8::splat(t_max))));
-                (tn, tf)
-            },
-            hit,
-        )
+        // Each distance one multiply–subtract `b·(1/d) − q` (`docs/theory.md`
+        // §7.19).
+        self.walk_ray::<ORDERED>(stack, inv_d, t_max, hit, |b, a, entry| {
+            b.mul_sub_bound(inv[a], if entry { q_near[a] } else { q_far[a] })
+        })
     }
 
     /// [`Self::walk`] for a ray with a zero (or subnormal) direction
@@ -406,6 +394,24 @@ impl Bvh {
     ) -> f32 {
         let o = [F8::splat(o.x), F8::splat(o.y), F8::splat(o.z)];
         let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
+        self.walk_ray::<ORDERED>(stack, inv_d, t_max, hit, |b, a, _| b.sub(o[a]).mul(inv[a]))
+    }
+
+    /// The walk of one ray, the slab test of `slab_hit` on 8 boxes:
+    /// `dist(b, a, entry)` is the distance along the ray to the planes `b`
+    /// of axis `a` (those it enters by if `entry`, else those it leaves by).
+    /// A NaN distance (a zero direction component, the origin on a slab
+    /// plane) is the first operand of `max`/`min`, which then return the
+    /// second (see `F8`): that slab is ignored, a conservative hit.
+    #[inline(always)]
+    fn walk_ray<const ORDERED: bool>(
+        &self,
+        stack: &mut [(u32, f32)],
+        inv_d: Vec3A,
+        t_max: f32,
+        hit: &mut impl FnMut(u32, u32, f32) -> f32,
+        dist: impl Fn(F8, usize, bool) -> F8,
+    ) -> f32 {
         let (near, far) = slab_planes([inv_d.x < 0.0, inv_d.y < 0.0, inv_d.z < 0.0]);
         let zero = F8::splat(0.0);
         self.walk_with::<ORDERED>(
@@ -413,12 +419,10 @@ impl Bvh {
             t_max,
             #[inline(always)]
             |b, t_max| {
-                // A NaN distance (the origin on a slab plane) is the first
-                // operand of `max`/`min`, which then return the second (see
-                // `F8`): that slab is ignored, a conservative hit.
-                let t = |i: usize, a: usize| b[i].sub(o[a]).mul(inv[a]);
-                let tn = t(near[0], 0).max(t(near[1], 1).max(t(near[2], 2).max(zero)));
-                let tf = t(far[0], 0).min(t(far[1], 1).min(t(far[2], 2).min(F8::splat(t_max))));
+                let tn = |a: usize| dist(b[near[a]], a, true);
+                let tf = |a: usize| dist(b[far[a]], a, false);
+                let tn = tn(0).max(tn(1).max(tn(2).max(zero)));
+                let tf = tf(0).min(tf(1).min(tf(2).min(F8::splat(t_max))));
                 (tn, tf)
             },
             hit,
