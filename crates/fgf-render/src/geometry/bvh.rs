@@ -74,7 +74,7 @@ impl Aabb {
     pub fn intersect(&self, o: Vec3A, inv_d: Vec3A, t_max: f32) -> Option<(f32, f32)> {
         let (tn, tf) = slab_interval(self.min, self.max, o, inv_d, t_max);
         // The factor 1 + 2γ(3) (pbrt) makes the test conservative against
-        // the rounding of the two products above.
+        // the rounding of the differences and products of `slab_interval`.
         if tn <= tf * 1.000_000_4 {
             Some((tn, tf))
         } else {
@@ -605,7 +605,7 @@ fn slab_offsets(p: Vec3A) -> ([F8; 3], [F8; 3]) {
 /// and leaves the box `[min, max]`, clipped to `[0, t_max]` (the box is
 /// missed if the first exceeds the second). Along an axis where the
 /// direction is 0 and the origin lies on one of the box's planes, a product
-/// `0·∞` is NaN, which fails both comparisons: the ray runs in the box's
+/// `0·∞` is NaN, which `max`/`min` pass over: the ray runs in the box's
 /// face, and that slab is ignored (a conservative hit).
 #[inline(always)]
 fn slab_interval(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> (f32, f32) {
@@ -758,6 +758,8 @@ fn build_rec(
 
 #[cfg(test)]
 mod tests {
+    use super::*;
+
     /// A ray with a zero direction component whose origin lies on one of
     /// the box's planes along that axis touches the box's face: both slab
     /// tests count it as a hit (the slab is ignored), on either plane and
@@ -765,8 +767,6 @@ mod tests {
     /// hits and outside it misses.
     #[test]
     fn slab_tests_ignore_a_slab_the_ray_runs_in() {
-        use super::{slab_hit, Aabb};
-        use glam::Vec3A;
         let b = Aabb {
             min: Vec3A::new(0.0, 0.0, 0.0),
             max: Vec3A::new(1.0, 1.0, 1.0),
@@ -787,8 +787,6 @@ mod tests {
             }
         }
     }
-
-    use super::*;
 
     /// Every primitive whose box the ray crosses is visited (compared with
     /// brute force over random boxes and rays).

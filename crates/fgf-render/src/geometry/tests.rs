@@ -81,9 +81,10 @@ fn packed_bvh_matches_brute_force() {
 /// (zero direction components) from the soup's vertices (origins on slab
 /// planes), rays in random directions from points on the triangles, and
 /// random `t_max`; the all-hits query finds as many hits. The soup lies
-/// near the origin, then 20,000 units away, where a ray's `o·(1/d)` is
-/// 10⁵ times its distances to the boxes and the node test's offsets must
-/// absorb its rounding (`docs/theory.md` §7.19).
+/// near the origin, then 20,000 units away, where the rounding of a ray's
+/// `o·(1/d)` (10⁵ times its distances to the boxes) and of the triangles'
+/// corners must be absorbed by the node test's offsets and the widened
+/// boxes (`docs/theory.md` §7.19).
 #[test]
 fn wide_bvh_matches_brute_force_on_large_soup() {
     wide_bvh_matches_brute_force_at(Vec3::ZERO, 13);
@@ -108,10 +109,10 @@ fn wide_bvh_matches_brute_force_at(offset: Vec3, seed: u64) {
         "the tree should be several levels deep"
     );
     let mut n_hits = 0;
+    let vertex = |s: &mut crate::math::Sampler| {
+        vertices[(s.next_1d() * vertices.len() as f32) as usize % vertices.len()]
+    };
     for k in 0..6000 {
-        let vertex = |s: &mut crate::math::Sampler| {
-            vertices[(s.next_1d() * vertices.len() as f32) as usize % vertices.len()]
-        };
         let (o, d) = match k % 3 {
             0 => {
                 let o = r3(&mut s) * 6.0 - Vec3::ONE + offset;
