@@ -22,11 +22,13 @@
 //! fgf_io::image::write_exr("out.exr".as_ref(), out.width, out.height, 3, &out.image).unwrap();
 //! ```
 
+use crate::emitter::envmap::Envmap;
 use crate::error::RenderError;
 use crate::film::{
     accumulate_sample, flush_pending, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS,
 };
 use crate::geometry::bvh::BEAM;
+use crate::integrator::STEP;
 use crate::math::Sampler;
 use crate::ray::Ray;
 use crate::spectrum::Spectrum;
@@ -49,7 +51,8 @@ pub struct RenderOptions {
     /// Samples per pixel per pass (default: chosen so a pass holds about
     /// 2¹⁸ samples, or 16 samples per pixel if that stays within 2²⁰; it
     /// does not change the image, only how often cancellation is checked
-    /// and how many camera rays of a pixel are traced as one beam).
+    /// and whether the camera rays traced as one beam are a pixel's or
+    /// those of neighbouring pixels).
     pub spp_per_pass: Option<u32>,
 }
 
@@ -61,8 +64,9 @@ pub struct Prepared {
     /// ([`crate::geometry::Geometry::intersect_beam`]) where the integrator
     /// allows it; off, each alone (the reference the tests compare with).
     beams: bool,
-    /// The paths of a beam go on in step where the scene is lit by an
-    /// environment map alone ([`World::li_beam`]); off, each alone (the
+    /// The paths of a batch of camera samples go on in step where the
+    /// scene is lit by an environment map alone ([`World::li_beam`]); off,
+    /// each alone (the
     /// reference the tests compare with). On by default where the 8-lane
     /// kernels are vector instructions ([`crate::lanes`]); the portable
     /// build, where they are written out lane by lane, keeps each path
@@ -131,6 +135,12 @@ impl Prepared {
         } else {
             None
         };
+        // Paths in step gain from more of them at each stage; paths alone
+        // from batches no larger than a beam (docs/benchmarks.md).
+        let batch_max = match lone_envmap {
+            Some(_) if beams => STEP,
+            _ => BEAM,
+        };
         let mut next = samples.start;
         let out_of_range =
             |x: usize, y: usize, (channel, value): (usize, f64)| RenderError::OutOfRange {
@@ -148,70 +158,44 @@ impl Prepared {
             let first = next;
             rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
                 |(y, (row, pend), mut sq)| {
+                    // The camera samples of a row's pixels, `first..first + n`
+                    // of each, are made a batch of up to `STEP` at a time
+                    // (whole runs of up to `BEAM` samples of a pixel), then
+                    // traced (`Prepared::trace_batch`) and added to their
+                    // pixels in the batch's order: each pixel's in the order
+                    // of `k`.
+                    let mut batch = Batch::new();
+                    let mut flush = |batch: &mut Batch| {
+                        let ls = self.trace_batch(batch, lone_envmap, beams);
+                        for (j, l) in ls[..batch.len].iter().enumerate() {
+                            let x = batch.x[j];
+                            let (px, pp) = (&mut row[3 * x..3 * x + 3], &mut pend[x]);
+                            add_sample(px, pp, &mut sq, x, *l * batch.weight[j])
+                                .map_err(|e| out_of_range(x, y, e))?;
+                        }
+                        batch.len = 0;
+                        Ok::<(), RenderError>(())
+                    };
                     for x in 0..w {
                         let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);
-                        let px = &mut row[3 * x..3 * x + 3];
-                        let pp = &mut pend[x];
-                        let err = |e| out_of_range(x, y, e);
-                        // The camera samples of up to `BEAM` samples of
-                        // the pixel are made first, then their paths: a
-                        // sample's start (its stream's keys, the ray and its
-                        // normalisation) is a chain of dependent multiplies,
-                        // divisions and square roots, and made together the
-                        // chains overlap. With `beams`, the rays, nearly
-                        // parallel, also find their first hits by one beam
-                        // query; each path then goes on alone, or all in
-                        // step where their light samples are drawn together
-                        // (`World::li_beam`).
                         let mut k = first;
                         while k < first + n {
                             let m = ((first + n - k) as usize).min(BEAM);
-                            let mut samplers: [Sampler; BEAM] =
-                                std::array::from_fn(|_| Sampler::idle());
-                            let mut weights = [0f32; BEAM];
-                            let mut rays = [Ray {
-                                o: Vec3A::ZERO,
-                                d: Vec3A::Z,
-                            }; BEAM];
-                            let mut t_max = [0f32; BEAM];
+                            if batch.len + m > batch_max {
+                                flush(&mut batch)?;
+                            }
                             for j in 0..m {
-                                (samplers[j], rays[j], t_max[j], weights[j]) =
+                                let b = batch.len;
+                                (batch.s[b], batch.rays[b], batch.t_max[b], batch.weight[b]) =
                                     self.camera_sample(pixel_key, x, y, k + j as u32);
-                            }
-                            let mut hits = [None; BEAM];
-                            if beams {
-                                self.world.geom.intersect_beam(
-                                    &rays[..m],
-                                    &t_max[..m],
-                                    &mut hits[..m],
-                                );
-                            }
-                            let mut ls = [Spectrum::ZERO; BEAM];
-                            match lone_envmap {
-                                Some(env) if beams => self.world.li_beam(
-                                    env,
-                                    &rays[..m],
-                                    &t_max[..m],
-                                    &hits[..m],
-                                    &mut samplers[..m],
-                                    &mut ls[..m],
-                                ),
-                                _ => {
-                                    for j in 0..m {
-                                        let s = &mut samplers[j];
-                                        ls[j] = if beams {
-                                            self.world.li_seen(rays[j], t_max[j], hits[j], s)
-                                        } else {
-                                            self.world.li(rays[j], t_max[j], s)
-                                        };
-                                    }
-                                }
-                            }
-                            for j in 0..m {
-                                add_sample(px, pp, &mut sq, x, ls[j] * weights[j]).map_err(err)?;
+                                batch.x[b] = x;
+                                batch.len += 1;
                             }
                             k += m as u32;
                         }
+                    }
+                    if batch.len > 0 {
+                        flush(&mut batch)?;
                     }
                     progress.inc((w as u64) * n as u64);
                     Ok::<(), RenderError>(())
@@ -266,6 +250,84 @@ impl Prepared {
             .sample_position(x as u32, y as u32, w, h, &mut s);
         let (ray, t_max) = self.world.camera.generate_ray(fx, fy);
         (s, ray, t_max, weight)
+    }
+}
+
+/// Camera samples waiting to be traced: pixel `x[j]` of a row, its random
+/// stream, camera ray, the ray's limit and filter weight, for `j < len`.
+struct Batch {
+    len: usize,
+    x: [usize; STEP],
+    s: [Sampler; STEP],
+    rays: [Ray; STEP],
+    t_max: [f32; STEP],
+    weight: [f32; STEP],
+}
+
+impl Batch {
+    fn new() -> Batch {
+        Batch {
+            len: 0,
+            x: [0; STEP],
+            s: std::array::from_fn(|_| Sampler::idle()),
+            rays: [Ray {
+                o: Vec3A::ZERO,
+                d: Vec3A::Z,
+            }; STEP],
+            t_max: [0.0; STEP],
+            weight: [0.0; STEP],
+        }
+    }
+}
+
+impl Prepared {
+    /// The radiance of each sample of `batch`. With `beams`, its camera
+    /// rays find their first hits `BEAM` at a time by one beam query (rays
+    /// of one pixel or of neighbouring pixels, nearly parallel); then each
+    /// path goes on alone, or all in step where the scene is lit by an
+    /// environment map alone (`env`; [`World::li_beam`]). Each sample's
+    /// value is the one [`World::li`] gives it.
+    #[inline(never)]
+    fn trace_batch(
+        &self,
+        batch: &mut Batch,
+        env: Option<&Envmap>,
+        beams: bool,
+    ) -> [Spectrum; STEP] {
+        let m = batch.len;
+        let mut hits = [None; STEP];
+        if beams {
+            for c in (0..m).step_by(BEAM) {
+                let e = (c + BEAM).min(m);
+                self.world.geom.intersect_beam(
+                    &batch.rays[c..e],
+                    &batch.t_max[c..e],
+                    &mut hits[c..e],
+                );
+            }
+        }
+        let mut ls = [Spectrum::ZERO; STEP];
+        match env {
+            Some(env) if beams => self.world.li_beam(
+                env,
+                &batch.rays[..m],
+                &batch.t_max[..m],
+                &hits[..m],
+                &mut batch.s[..m],
+                &mut ls[..m],
+            ),
+            _ => {
+                for j in 0..m {
+                    let (ray, t_max, s) = (batch.rays[j], batch.t_max[j], &mut batch.s[j]);
+                    ls[j] = if beams {
+                        self.world.li_seen(ray, t_max, hits[j], s)
+                    } else {
+                        self.world.li(ray, t_max, s)
+                    };
+                }
+            }
+        }
+        ls
     }
 }
 
@@ -369,14 +431,17 @@ mod tests {
         desc
     }
 
-    /// The paths of a beam in step (a scene lit by an environment map
+    /// The paths of a batch in step (a scene lit by an environment map
     /// alone) give each sample the bits of the paths traced one at a time:
     /// a textured rough-plastic height field, a rough conductor and a
     /// two-sided rough plastic seen from both sides (all GGX: their values
     /// toward light samples and sampled directions in eight lanes), and a
     /// smooth conductor and a dielectric sphere (no next-event estimation
-    /// there), under an environment map with a bright spot; full beams of
-    /// 16 and the beams of 5, 3 and 7 of split sample ranges. With a
+    /// there), under an environment map with a bright spot. The batches of
+    /// paths in step hold the samples of four pixels (passes of 16), of
+    /// two (passes of 32), of up to twenty-one (passes of 7, and the runs of
+    /// 5 and 3 of split sample ranges: beams span pixels, batches end
+    /// within rows), and of a whole row of 36 pixels (passes of 1). With a
     /// medium, the paths go on alone.
     #[test]
     fn paths_in_step_match_paths_alone() {
@@ -477,8 +542,11 @@ mod tests {
         );
         assert_eq!(a.image, b.image, "paths in step against paths alone");
         assert_eq!(a.variance, b.variance);
-        let c = render(&in_step, 7);
-        assert_eq!(a.image, c.image, "beams of 7 against beams of 16");
+        for pass in [7, 32, 1] {
+            let c = render(&in_step, pass);
+            assert_eq!(a.image, c.image, "passes of {pass} against passes of 16");
+        }
+        assert_eq!(a.image, render(&alone, 1).image, "paths alone, passes of 1");
         // In a scene with a medium, the paths go on alone.
         desc.media.push(fgf_scene::MediumDesc::Homogeneous {
             sigma_t: [1.5; 3],

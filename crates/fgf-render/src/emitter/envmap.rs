@@ -15,7 +15,7 @@
 //!   uniformly in it. The solid-angle pdf is `p_uv / (2π² sin θ)`.
 //! * [`Envmap::sample8`] draws eight samples at once with the 8-lane
 //!   vectors of `crate::lanes` (gathers from the same tables), each with
-//!   the bits of [`Envmap::sample`]: the paths of a beam that go on in step
+//!   the bits of [`Envmap::sample`]: the paths that go on in step
 //!   (`World::li_beam`) draw their light samples so.
 
 use crate::lanes::{F8, I8, M8};

@@ -28,7 +28,7 @@
 //!
 //! `li_path` traces one path from start to end and is the reference. In
 //! scenes lit by an environment map alone and without media,
-//! `World::li_beam` runs the camera samples of a beam in step, as stages
+//! `World::li_beam` runs a batch of camera samples in step, as stages
 //! over a `PathState`, so that some stages work on eight paths at once (the
 //! light samples, the environment's radiance, and the values of GGX
 //! `roughconductor` and `roughplastic` BSDFs), with each sample's bits
@@ -40,7 +40,6 @@ mod direct_lighting;
 use crate::bsdf::{eval_pdf8, sample_wo8_lanes, Bsdf, BsdfSample};
 use crate::emitter::envmap::Envmap;
 use crate::emitter::{Emitter, LightSample};
-use crate::geometry::bvh::BEAM;
 use crate::geometry::{Hit, HitRecord};
 use crate::lanes::F8;
 use crate::math::{bin_index, mis_power, Frame, Sampler};
@@ -122,12 +121,18 @@ enum Stop<'w> {
 /// docs/benchmarks.md.)
 const EVAL8_LANES_MIN: usize = 3;
 
+/// Most paths that [`World::li_beam`] runs in step (their lanes are bits
+/// of a `u64`). More paths at a stage fill more of the eight-lane kernels'
+/// groups and overlap more walks; the renderer gives it batches of up to
+/// this many camera samples (docs/benchmarks.md).
+pub(crate) const STEP: usize = 64;
+
 /// Calls `f(lanes, n)` with the paths of `todo` (a mask of lanes) in
 /// groups at one scene BSDF (`bsdf_id`), in lane order, up to eight at a
 /// time: the `n` lanes of the group, then its last repeated to fill
 /// eight. Groups of fewer than [`EVAL8_LANES_MIN`] are left out.
 #[inline(always)]
-fn groups8(mut todo: u32, bsdf_id: &[u32; BEAM], mut f: impl FnMut([usize; 8], usize)) {
+fn groups8(mut todo: u64, bsdf_id: &[u32; STEP], mut f: impl FnMut([usize; 8], usize)) {
     while todo != 0 {
         let id = bsdf_id[todo.trailing_zeros() as usize];
         let (mut lanes, mut n, mut rest) = ([0usize; 8], 0, todo);
@@ -151,18 +156,18 @@ fn groups8(mut todo: u32, bsdf_id: &[u32; BEAM], mut f: impl FnMut([usize; 8], u
 
 /// The lanes of the mask `mask`, in increasing order.
 #[inline(always)]
-fn lanes_of(mut mask: u32) -> impl Iterator<Item = usize> {
+fn lanes_of(mut mask: u64) -> impl Iterator<Item = usize> {
     std::iter::from_fn(move || {
         let j = mask.trailing_zeros() as usize;
         mask &= mask.wrapping_sub(1);
-        (j < 32).then_some(j)
+        (j < 64).then_some(j)
     })
 }
 
 /// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
 #[inline(always)]
-fn lanes8(a: &[f32; BEAM], c: usize) -> F8 {
-    F8::from_array(std::array::from_fn(|l| a[(c + l) % BEAM]))
+fn lanes8(a: &[f32; STEP], c: usize) -> F8 {
+    F8::from_array(std::array::from_fn(|l| a[(c + l) % STEP]))
 }
 
 /// The light sample of a surface's next-event estimation.
@@ -248,10 +253,10 @@ impl World {
         }
     }
 
-    /// [`Self::li_seen`] of each of the camera samples of a beam (at most
-    /// [`BEAM`]; `rays`, `t_max`, `first` and `s` per sample), written to
-    /// `out`, for a scene lit by the environment map `env` alone, without
-    /// media ([`Self::lone_envmap`]). The paths go on in step, a surface
+    /// [`Self::li_seen`] of each of up to [`STEP`] camera samples (`rays`,
+    /// `t_max`, `first` and `s` per sample), written to `out`, for a scene
+    /// lit by the environment map `env` alone, without media
+    /// ([`Self::lone_envmap`]). The paths go on in step, a surface
     /// interaction each per round, so that the light samples of their
     /// next-event estimations are drawn together ([`Envmap::sample8`]), the
     /// radiance of the environment found by those that escape is looked up
@@ -272,34 +277,34 @@ impl World {
         out: &mut [Spectrum],
     ) {
         debug_assert!(self.takes_first_hit() && self.lone_envmap().is_some());
-        let m = rays.len().min(BEAM);
-        let mut paths: [Option<PathState>; BEAM] = std::array::from_fn(|_| None);
+        let m = rays.len().min(STEP);
+        let mut paths: [Option<PathState>; STEP] = std::array::from_fn(|_| None);
         // The paths that go on (a mask of lanes: the loops below visit
-        // only those, not all 16 while the last few paths finish).
-        let mut live = 0u32;
+        // only those, not all 64 while the last few paths finish).
+        let mut live = 0u64;
         for j in 0..m {
             let known = match first[j] {
                 Some(h) => Known::Hit(h),
                 None => Known::Miss,
             };
             paths[j] = self.path_start(rays[j], t_max[j], known, &mut s[j]);
-            live |= u32::from(paths[j].is_some()) << j;
+            live |= u64::from(paths[j].is_some()) << j;
             out[j] = Spectrum::ZERO;
         }
         // Per round: each live path's next stop; the lanes (and variates)
         // of those whose next-event estimation needs a light sample, with the
         // samples drawn for them; the lanes of those that escaped.
-        let mut stops: [Option<Stop>; BEAM] = std::array::from_fn(|_| None);
-        let mut need = [0usize; BEAM];
+        let mut stops: [Option<Stop>; STEP] = std::array::from_fn(|_| None);
+        let mut need = [0usize; STEP];
         // The scene BSDF of each path at a surface.
-        let mut bsdf_id = [0u32; BEAM];
-        let mut u = [[0f32; BEAM]; 2];
-        let mut light: [Option<LightSample>; BEAM] = [None; BEAM];
-        let mut escaped = [0usize; BEAM];
-        let mut dirs = [[0f32; BEAM]; 3];
+        let mut bsdf_id = [0u32; STEP];
+        let mut u = [[0f32; STEP]; 2];
+        let mut light: [Option<LightSample>; STEP] = [None; STEP];
+        let mut escaped = [0usize; STEP];
+        let mut dirs = [[0f32; STEP]; 3];
         while live != 0 {
             // `surface`: the paths at a surface interaction this round.
-            let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u32);
+            let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u64);
             self.walk_all(&mut paths, live);
             for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
@@ -368,13 +373,13 @@ impl World {
             // The BSDFs' values toward the light samples, eight paths at a
             // time at the same scene BSDF where it has an 8-lane
             // evaluation (`evaluated`: the paths that have them).
-            let mut todo = 0u32;
+            let mut todo = 0u64;
             for &j in &need[..n_need] {
                 if light[j].is_some() && self.bsdf_eval8[bsdf_id[j] as usize] {
                     todo |= 1 << j;
                 }
             }
-            let (mut evaluated, mut tf, mut tp) = (0u32, [Spectrum::ZERO; BEAM], [0f32; BEAM]);
+            let (mut evaluated, mut tf, mut tp) = (0u64, [Spectrum::ZERO; STEP], [0f32; STEP]);
             groups8(todo, &bsdf_id, |lanes, n| {
                 let wi = lanes.map(|j| stop_of(j).wi_local);
                 let wo = lanes.map(|j| match &light[j] {
@@ -394,17 +399,17 @@ impl World {
             // ([`sample_wo8_lanes`]; `draw8`), else one by one, and the
             // values there eight at a time (`sampled`: the paths whose
             // sample is made here; `todo`: those that have a direction).
-            let (mut sampled, mut draw8, mut todo) = (0u32, 0u32, 0u32);
-            let mut bs: [Option<BsdfSample>; BEAM] = [None; BEAM];
-            let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); BEAM];
-            let mut us = [(0f32, [0f32; 2]); BEAM];
+            let (mut sampled, mut draw8, mut todo) = (0u64, 0u64, 0u64);
+            let mut bs: [Option<BsdfSample>; STEP] = [None; STEP];
+            let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); STEP];
+            let mut us = [(0f32, [0f32; 2]); STEP];
             for j in lanes_of(surface) {
                 if !self.bsdf_eval8[bsdf_id[j] as usize] {
                     continue;
                 }
                 us[j] = (s[j].next_1d(), s[j].next_2d());
                 sampled |= 1 << j;
-                draw8 |= u32::from(self.bsdf_sample8[bsdf_id[j] as usize]) << j;
+                draw8 |= u64::from(self.bsdf_sample8[bsdf_id[j] as usize]) << j;
             }
             let mut draw_alone = sampled;
             groups8(draw8, &bsdf_id, |lanes, n| {
@@ -482,10 +487,10 @@ impl World {
     /// hits as [`Self::path_advance`]'s own query, which scenes with
     /// `null` boundaries need and which [`Self::li_beam`] does not serve.)
     #[inline(always)]
-    fn walk_all(&self, paths: &mut [Option<PathState>; BEAM], live: u32) {
+    fn walk_all(&self, paths: &mut [Option<PathState>; STEP], live: u64) {
         let geom = &self.geom;
-        let mut rec: [Option<HitRecord>; BEAM] = [None; BEAM];
-        let mut walked = 0u32;
+        let mut rec: [Option<HitRecord>; STEP] = [None; STEP];
+        let mut walked = 0u64;
         for j in lanes_of(live) {
             let Some(st) = &paths[j] else { continue };
             if let Known::Unknown = st.known {
