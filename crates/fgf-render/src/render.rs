@@ -28,6 +28,7 @@ use crate::film::{
     accumulate_sample, flush_pending, FilmState, Filter, Fixed, RenderOutput, FIXED_FRAC_BITS,
 };
 use crate::geometry::bvh::BEAM;
+use crate::geometry::Hit;
 use crate::integrator::STEP;
 use crate::math::Sampler;
 use crate::ray::Ray;
@@ -166,8 +167,8 @@ impl Prepared {
                     // of `k`.
                     let mut batch = Batch::new();
                     let mut flush = |batch: &mut Batch| {
-                        let ls = self.trace_batch(batch, lone_envmap, beams);
-                        for (j, l) in ls[..batch.len].iter().enumerate() {
+                        self.trace_batch(batch, lone_envmap, beams);
+                        for (j, l) in batch.l[..batch.len].iter().enumerate() {
                             let x = batch.x[j];
                             let (px, pp) = (&mut row[3 * x..3 * x + 3], &mut pend[x]);
                             add_sample(px, pp, &mut sq, x, *l * batch.weight[j])
@@ -254,7 +255,8 @@ impl Prepared {
 }
 
 /// Camera samples waiting to be traced: pixel `x[j]` of a row, its random
-/// stream, camera ray, the ray's limit and filter weight, for `j < len`.
+/// stream, camera ray, the ray's limit and filter weight, for `j < len`;
+/// and, once traced, their first hits (with beams) and radiance `l`.
 struct Batch {
     len: usize,
     x: [usize; STEP],
@@ -262,6 +264,8 @@ struct Batch {
     rays: [Ray; STEP],
     t_max: [f32; STEP],
     weight: [f32; STEP],
+    hits: [Option<Hit>; STEP],
+    l: [Spectrum; STEP],
 }
 
 impl Batch {
@@ -276,58 +280,50 @@ impl Batch {
             }; STEP],
             t_max: [0.0; STEP],
             weight: [0.0; STEP],
+            hits: [None; STEP],
+            l: [Spectrum::ZERO; STEP],
         }
     }
 }
 
 impl Prepared {
-    /// The radiance of each sample of `batch`. With `beams`, its camera
-    /// rays find their first hits `BEAM` at a time by one beam query (rays
-    /// of one pixel or of neighbouring pixels, nearly parallel); then each
-    /// path goes on alone, or all in step where the scene is lit by an
+    /// The radiance `batch.l` of each sample of `batch`. With `beams`, its
+    /// camera rays find their first hits `BEAM` at a time by one beam query
+    /// (rays of one pixel or of neighbouring pixels, nearly parallel); then
+    /// each path goes on alone, or all in step where the scene is lit by an
     /// environment map alone (`env`; [`World::li_beam`]). Each sample's
     /// value is the one [`World::li`] gives it.
     #[inline(never)]
-    fn trace_batch(
-        &self,
-        batch: &mut Batch,
-        env: Option<&Envmap>,
-        beams: bool,
-    ) -> [Spectrum; STEP] {
+    fn trace_batch(&self, batch: &mut Batch, env: Option<&Envmap>, beams: bool) {
         let m = batch.len;
-        let mut hits = [None; STEP];
+        let b = batch;
         if beams {
             for c in (0..m).step_by(BEAM) {
                 let e = (c + BEAM).min(m);
-                self.world.geom.intersect_beam(
-                    &batch.rays[c..e],
-                    &batch.t_max[c..e],
-                    &mut hits[c..e],
-                );
+                let geom = &self.world.geom;
+                geom.intersect_beam(&b.rays[c..e], &b.t_max[c..e], &mut b.hits[c..e]);
             }
         }
-        let mut ls = [Spectrum::ZERO; STEP];
         match env {
             Some(env) if beams => self.world.li_beam(
                 env,
-                &batch.rays[..m],
-                &batch.t_max[..m],
-                &hits[..m],
-                &mut batch.s[..m],
-                &mut ls[..m],
+                &b.rays[..m],
+                &b.t_max[..m],
+                &b.hits[..m],
+                &mut b.s[..m],
+                &mut b.l[..m],
             ),
             _ => {
                 for j in 0..m {
-                    let (ray, t_max, s) = (batch.rays[j], batch.t_max[j], &mut batch.s[j]);
-                    ls[j] = if beams {
-                        self.world.li_seen(ray, t_max, hits[j], s)
+                    let (ray, t_max, s) = (b.rays[j], b.t_max[j], &mut b.s[j]);
+                    b.l[j] = if beams {
+                        self.world.li_seen(ray, t_max, b.hits[j], s)
                     } else {
                         self.world.li(ray, t_max, s)
                     };
                 }
             }
         }
-        ls
     }
 }
 
