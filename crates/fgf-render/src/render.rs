@@ -61,17 +61,17 @@ pub struct RenderOptions {
 pub struct Prepared {
     world: World,
     filter: Filter,
-    /// Camera rays are queried a pixel's samples at a time
-    /// ([`crate::geometry::Geometry::intersect_beam`]) where the integrator
-    /// allows it; off, each alone (the reference the tests compare with).
+    /// Camera rays are queried up to [`BEAM`] at a time, a pixel's or
+    /// neighbouring pixels' ([`crate::geometry::Geometry::intersect_beam`]),
+    /// where the integrator allows it; off, each alone (the reference the
+    /// tests compare with).
     beams: bool,
     /// The paths of a batch of camera samples go on in step where the
     /// scene is lit by an environment map alone ([`World::li_beam`]); off,
-    /// each alone (the
-    /// reference the tests compare with). On by default where the 8-lane
-    /// kernels are vector instructions ([`crate::lanes`]); the portable
-    /// build, where they are written out lane by lane, keeps each path
-    /// alone (the same image either way).
+    /// each alone (the reference the tests compare with). On by default
+    /// where the 8-lane kernels are vector instructions ([`crate::lanes`]);
+    /// the portable build, where they are written out lane by lane, keeps
+    /// each path alone (the same image either way).
     lockstep: bool,
     /// The scene's `sample_count`.
     pub spp: u32,
@@ -160,11 +160,14 @@ impl Prepared {
             rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
                 |(y, (row, pend), mut sq)| {
                     // The camera samples of a row's pixels, `first..first + n`
-                    // of each, are made a batch of up to `STEP` at a time
-                    // (whole runs of up to `BEAM` samples of a pixel), then
-                    // traced (`Prepared::trace_batch`) and added to their
-                    // pixels in the batch's order: each pixel's in the order
-                    // of `k`.
+                    // of each, are made a batch of up to `batch_max` at a
+                    // time (whole runs of up to `BEAM` samples of a pixel),
+                    // then traced (`Prepared::trace_batch`) and added to
+                    // their pixels in the batch's order: each pixel's in the
+                    // order of `k`. A sample's start (its stream's keys, the
+                    // ray and its normalisation) is a chain of dependent
+                    // multiplies, divisions and square roots; made together,
+                    // the chains overlap.
                     let mut batch = Batch::new();
                     let mut flush = |batch: &mut Batch| {
                         self.trace_batch(batch, lone_envmap, beams);
