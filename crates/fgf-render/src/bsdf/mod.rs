@@ -53,6 +53,8 @@ use plastic::{Plastic, RoughPlastic};
 use principled::Principled;
 use rough::{RoughConductor, RoughDielectric};
 use std::f32::consts::FRAC_1_PI;
+use std::marker::PhantomData;
+use std::mem::ManuallyDrop;
 use std::sync::Arc;
 
 /// The closed set of BSDF models.
@@ -122,6 +124,60 @@ pub struct Bsdf {
     /// texture coordinates. `None` for untextured BSDFs, which pay one
     /// branch per hit for this.
     pub textures: Option<Arc<[(TexturedParam, Texture)]>>,
+}
+
+/// A textured BSDF made concrete at one hit by [`Bsdf::at_shared`]: reads
+/// as a [`Bsdf`], shares the scene BSDF's tables, and releases nothing when
+/// it goes.
+pub struct SharedAt<'a> {
+    bsdf: ManuallyDrop<Bsdf>,
+    _scene: PhantomData<&'a Bsdf>,
+}
+
+impl std::ops::Deref for SharedAt<'_> {
+    type Target = Bsdf;
+    #[inline(always)]
+    fn deref(&self) -> &Bsdf {
+        &self.bsdf
+    }
+}
+
+/// The BSDF at a hit: the scene's own, or a textured one made concrete
+/// there (shared, or owned for a `mask`).
+pub enum HitBsdf<'a> {
+    Scene(&'a Bsdf),
+    Shared(SharedAt<'a>),
+    Owned(Bsdf),
+}
+
+impl HitBsdf<'_> {
+    /// The BSDF `bsdf` at texture coordinates `uv`, computed (by `uv`)
+    /// only if it is textured.
+    #[inline(always)]
+    pub fn new(bsdf: &Bsdf, uv: impl FnOnce() -> Vec2) -> HitBsdf<'_> {
+        match bsdf.textures {
+            None => HitBsdf::Scene(bsdf),
+            Some(_) => {
+                let uv = uv();
+                match bsdf.at_shared(uv) {
+                    Some(b) => HitBsdf::Shared(b),
+                    None => HitBsdf::Owned(bsdf.at(uv)),
+                }
+            }
+        }
+    }
+}
+
+impl std::ops::Deref for HitBsdf<'_> {
+    type Target = Bsdf;
+    #[inline(always)]
+    fn deref(&self) -> &Bsdf {
+        match self {
+            HitBsdf::Scene(b) => b,
+            HitBsdf::Shared(b) => b,
+            HitBsdf::Owned(b) => b,
+        }
+    }
 }
 
 /// The result of sampling a BSDF.
@@ -333,14 +389,28 @@ impl Bsdf {
     /// `plastic` keep the textures' means, as Mitsuba's do).
     #[inline(never)]
     pub fn at(&self, uv: Vec2) -> Bsdf {
-        use TexturedParam as P;
         let mut b = Bsdf {
             kind: self.kind.clone(),
             twosided: self.twosided,
             textures: None,
         };
+        self.set_textured(&mut b.kind, uv);
+        if let BsdfKind::Mask(m) = &mut b.kind {
+            if m.nested.textures.is_some() {
+                m.nested = m.nested.at(uv);
+            }
+        }
+        b
+    }
+
+    /// Write the textured parameters' values at `uv` into `kind` (a copy
+    /// of `self.kind`). Only plain values are written: nothing that owns
+    /// memory is replaced or dropped ([`Bsdf::at_shared`] relies on it).
+    #[inline(always)]
+    fn set_textured(&self, kind: &mut BsdfKind, uv: Vec2) {
+        use TexturedParam as P;
         for (param, tex) in self.textures.iter().flat_map(|t| t.iter()) {
-            match (param, &mut b.kind) {
+            match (param, &mut *kind) {
                 (P::Reflectance, BsdfKind::Diffuse { reflectance }) => *reflectance = tex.eval(uv),
                 (
                     P::SpecularReflectance,
@@ -391,12 +461,35 @@ impl Bsdf {
                 _ => {}
             }
         }
-        if let BsdfKind::Mask(m) = &mut b.kind {
-            if m.nested.textures.is_some() {
-                m.nested = m.nested.at(uv);
-            }
+    }
+
+    /// [`Bsdf::at`] without the reference counts: the copy shares this
+    /// BSDF's tables (a `roughplastic`'s, behind an `Arc`) instead of
+    /// owning them, so a textured hit takes and releases no count, whose
+    /// atomic updates the render's threads would contend for. `None` for a
+    /// `mask`, whose nested BSDF is boxed (use [`Bsdf::at`]).
+    #[inline(never)]
+    pub fn at_shared(&self, uv: Vec2) -> Option<SharedAt<'_>> {
+        if matches!(self.kind, BsdfKind::Mask(_)) {
+            return None;
         }
-        b
+        // SAFETY: a bitwise copy of `self` that is never dropped
+        // (`ManuallyDrop`) and lives no longer than `self` (the lifetime of
+        // `SharedAt`): the `Arc`s it holds are `self`'s, used only to read
+        // what `self` keeps alive, and never released. It holds no `Box`
+        // (a `mask` is refused above), so no unique pointer is duplicated.
+        // `set_textured` writes plain values only; `textures` is replaced
+        // by `ptr::write`, which drops nothing.
+        let mut b = unsafe {
+            let mut b = ManuallyDrop::new(std::ptr::read(self));
+            std::ptr::write(&mut b.textures, None);
+            b
+        };
+        self.set_textured(&mut b.kind, uv);
+        Some(SharedAt {
+            bsdf: b,
+            _scene: PhantomData,
+        })
     }
 
     /// True if the BSDF's value changes under a rotation about the normal

@@ -424,3 +424,73 @@ fn mask_scales_the_nested_bsdf() {
     let exp = Spectrum::ONE - 0.3 * (Spectrum::ONE - t);
     assert!((mt.null_transmission(wi) - exp).abs().max_element() < 1e-6);
 }
+
+/// A textured BSDF made concrete at a hit without reference counts
+/// ([`Bsdf::at_shared`]) has the values and samples of the owned copy
+/// ([`Bsdf::at`]), and leaves the shared tables' counts as they were; a
+/// `mask` (boxed nested BSDF) gets the owned copy.
+#[test]
+fn shared_copy_at_a_hit_is_the_owned_one() {
+    use crate::texture::Texture;
+    use fgf_scene::TexturedParam;
+    let checker = Texture::Checkerboard {
+        color0: Spectrum::new(0.8, 0.2, 0.1),
+        color1: Spectrum::new(0.1, 0.3, 0.7),
+        to_uv: glam::Affine2::from_scale(glam::Vec2::new(24.0, 6.0)),
+    };
+    let plastic = RoughPlastic::new(
+        1.49,
+        Spectrum::splat(0.5),
+        Spectrum::ONE,
+        false,
+        md(Distribution::Ggx, 0.2, true),
+    );
+    let tables = plastic.t_ext.clone();
+    let b = Bsdf {
+        kind: BsdfKind::RoughPlastic(plastic),
+        twosided: false,
+        textures: Some(Arc::from([(TexturedParam::DiffuseReflectance, checker)])),
+    };
+    let count = Arc::strong_count(&tables);
+    let wi = Vec3A::new(0.6, 0.0, 0.8);
+    let wo = Vec3A::new(-0.3, 0.4, (1.0f32 - 0.25).sqrt());
+    let mut colours = std::collections::HashSet::new();
+    for i in 0..200 {
+        let uv = glam::Vec2::new(i as f32 * 0.0173, i as f32 * 0.0311);
+        let owned = b.at(uv);
+        assert_eq!(Arc::strong_count(&tables), count + 1);
+        let shared = b.at_shared(uv).expect("not a mask");
+        assert!(shared.textures.is_none());
+        let (f, p) = shared.eval_pdf(wi, wo);
+        assert_eq!((f, p), owned.eval_pdf(wi, wo), "uv {uv}");
+        colours.insert(f.x.to_bits());
+        let (a, c) = (
+            shared.sample(wi, 0.3, [0.7, 0.2]),
+            owned.sample(wi, 0.3, [0.7, 0.2]),
+        );
+        assert_eq!(
+            a.map(|s| (s.wo, s.weight, s.pdf)),
+            c.map(|s| (s.wo, s.weight, s.pdf))
+        );
+        let hit = HitBsdf::new(&b, || uv);
+        assert!(matches!(hit, HitBsdf::Shared(_)));
+        assert_eq!(hit.eval_pdf(wi, wo), (f, p));
+    }
+    // Both checker colours were seen; no count was taken or released.
+    assert_eq!(colours.len(), 2);
+    assert_eq!(Arc::strong_count(&tables), count);
+    let mask = Bsdf {
+        kind: BsdfKind::Mask(Box::new(Mask {
+            opacity: 0.5,
+            smooth: false,
+            nested: b.clone(),
+        })),
+        twosided: false,
+        textures: Some(Arc::from([])),
+    };
+    assert!(mask.at_shared(glam::Vec2::ZERO).is_none());
+    assert!(matches!(
+        HitBsdf::new(&mask, || glam::Vec2::ZERO),
+        HitBsdf::Owned(_)
+    ));
+}

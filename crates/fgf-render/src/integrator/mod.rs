@@ -37,7 +37,7 @@
 mod direct;
 mod direct_lighting;
 
-use crate::bsdf::{eval_pdf8, sample_wo8_lanes, Bsdf, BsdfSample};
+use crate::bsdf::{eval_pdf8, sample_wo8_lanes, Bsdf, BsdfSample, HitBsdf};
 use crate::emitter::envmap::Envmap;
 use crate::emitter::{Emitter, LightSample};
 use crate::geometry::{Hit, HitRecord};
@@ -49,7 +49,6 @@ use crate::spectrum::{max_comp, Spectrum};
 use crate::world::{ShapeInfo, World};
 use direct::{MediumVertex, SurfaceVertex};
 use glam::Vec3A;
-use std::borrow::Cow;
 
 /// What an earlier query already says about the nearest hit of a ray.
 #[derive(Debug, Clone, Copy)]
@@ -92,7 +91,7 @@ struct PathState {
 struct SurfaceStop<'w> {
     h: Hit,
     info: ShapeInfo,
-    bsdf: Cow<'w, Bsdf>,
+    bsdf: HitBsdf<'w>,
     frame: Frame,
     /// The direction toward the previous vertex, in `frame`.
     wi_local: Vec3A,
@@ -185,11 +184,8 @@ impl World {
     /// The BSDF at hit `h`: a textured BSDF is made concrete at the hit's
     /// texture coordinates, which are computed only then.
     #[inline(always)]
-    pub(crate) fn bsdf_at<'a>(&'a self, bsdf: &'a Bsdf, h: &Hit) -> Cow<'a, Bsdf> {
-        match bsdf.textures {
-            None => Cow::Borrowed(bsdf),
-            Some(_) => Cow::Owned(bsdf.at(self.geom.uv(h))),
-        }
+    pub(crate) fn bsdf_at<'a>(&'a self, bsdf: &'a Bsdf, h: &Hit) -> HitBsdf<'a> {
+        HitBsdf::new(bsdf, || self.geom.uv(h))
     }
 
     /// The local frame of `bsdf` at hit `h`: Mitsuba's shading frame,
