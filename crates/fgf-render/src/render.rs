@@ -157,52 +157,36 @@ impl Prepared {
             }
             let n = per_pass.min(samples.end - next);
             let first = next;
+            // Each row in segments of about `UNIT` samples, the units of
+            // work: a pass ends when its last unit does, and small units
+            // leave a thread idle for less at the end of each pass.
+            let seg = (UNIT / n as usize).clamp(1, w);
             rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
-                |(y, (row, pend), mut sq)| {
-                    // The camera samples of a row's pixels, `first..first + n`
-                    // of each, are made a batch of up to `batch_max` at a
-                    // time (whole runs of up to `BEAM` samples of a pixel),
-                    // then traced (`Prepared::trace_batch`) and added to
-                    // their pixels in the batch's order: each pixel's in the
-                    // order of `k`. A sample's start (its stream's keys, the
-                    // ray and its normalisation) is a chain of dependent
-                    // multiplies, divisions and square roots; made together,
-                    // the chains overlap.
-                    let mut batch = Batch::new();
-                    let mut flush = |batch: &mut Batch| {
-                        self.trace_batch(batch, lone_envmap, beams);
-                        for (j, l) in batch.l[..batch.len].iter().enumerate() {
-                            let x = batch.x[j];
-                            let (px, pp) = (&mut row[3 * x..3 * x + 3], &mut pend[x]);
-                            add_sample(px, pp, &mut sq, x, *l * batch.weight[j])
-                                .map_err(|e| out_of_range(x, y, e))?;
-                        }
-                        batch.len = 0;
-                        Ok::<(), RenderError>(())
+                |(y, (row, pend), sq)| {
+                    let sq_segs: Vec<_> = match sq {
+                        Some((a, b)) => a
+                            .chunks_mut(3 * seg)
+                            .zip(b.chunks_mut(seg))
+                            .map(Some)
+                            .collect(),
+                        None => (0..w.div_ceil(seg)).map(|_| None).collect(),
                     };
-                    for x in 0..w {
-                        let pixel_key = Sampler::pixel_key(seed_key, (y * w + x) as u64);
-                        let mut k = first;
-                        while k < first + n {
-                            let m = ((first + n - k) as usize).min(BEAM);
-                            if batch.len + m > batch_max {
-                                flush(&mut batch)?;
-                            }
-                            for j in 0..m {
-                                let b = batch.len;
-                                (batch.s[b], batch.rays[b], batch.t_max[b], batch.weight[b]) =
-                                    self.camera_sample(pixel_key, x, y, k + j as u32);
-                                batch.x[b] = x;
-                                batch.len += 1;
-                            }
-                            k += m as u32;
-                        }
-                    }
-                    if batch.len > 0 {
-                        flush(&mut batch)?;
-                    }
-                    progress.inc((w as u64) * n as u64);
-                    Ok::<(), RenderError>(())
+                    row.par_chunks_mut(3 * seg)
+                        .zip(pend.par_chunks_mut(seg))
+                        .zip(sq_segs.into_par_iter())
+                        .enumerate()
+                        .try_for_each(|(i, ((row, pend), sq))| {
+                            let x0 = i * seg;
+                            self.render_segment(
+                                (seed_key, first, n),
+                                (x0, y),
+                                (row, pend, sq),
+                                (lone_envmap, beams, batch_max),
+                            )
+                            .map_err(|(x, e)| out_of_range(x, y, e))?;
+                            progress.inc((pend.len() as u64) * n as u64);
+                            Ok::<(), RenderError>(())
+                        })
                 },
             )?;
             next += n;
@@ -233,6 +217,70 @@ fn default_pass(pixels: usize) -> u32 {
         BEAM as u32
     } else {
         fit.clamp(1, 64) as u32
+    }
+}
+
+/// Samples in a unit of work of a pass (a segment of a row; a whole row
+/// where a pixel's samples of the pass are this many or more).
+const UNIT: usize = 1024;
+
+impl Prepared {
+    /// Samples `first..first + n` of the pixels `x0..x0 + pend.len()` of
+    /// row `y`, added to their sums (`row`, `pend`, `sq`: the segment's).
+    /// The camera samples are made a batch of up to `batch_max` at a time
+    /// (whole runs of up to `BEAM` samples of a pixel), then traced
+    /// (`Prepared::trace_batch`) and added to their pixels in the batch's
+    /// order: each pixel's in the order of `k`. A sample's start (its
+    /// stream's keys, the ray and its normalisation) is a chain of
+    /// dependent multiplies, divisions and square roots; made together,
+    /// the chains overlap. `Err((x, (channel, value)))` if a sum of pixel
+    /// `x` leaves the fixed-point range.
+    #[allow(clippy::type_complexity)]
+    fn render_segment(
+        &self,
+        (seed_key, first, n): (u64, u32, u32),
+        (x0, y): (usize, usize),
+        (row, pend, mut sq): (
+            &mut [Fixed],
+            &mut [[f64; 3]],
+            Option<(&mut [Fixed], &mut [[f64; 3]])>,
+        ),
+        (lone_envmap, beams, batch_max): (Option<&Envmap>, bool, usize),
+    ) -> Result<(), (usize, (usize, f64))> {
+        let (w, len) = (self.width, pend.len());
+        let mut batch = Batch::new();
+        let mut flush = |batch: &mut Batch| {
+            self.trace_batch(batch, lone_envmap, beams);
+            for (j, l) in batch.l[..batch.len].iter().enumerate() {
+                let x = batch.x[j];
+                let (px, pp) = (&mut row[3 * x..3 * x + 3], &mut pend[x]);
+                add_sample(px, pp, &mut sq, x, *l * batch.weight[j]).map_err(|e| (x0 + x, e))?;
+            }
+            batch.len = 0;
+            Ok(())
+        };
+        for x in 0..len {
+            let pixel_key = Sampler::pixel_key(seed_key, (y * w + x0 + x) as u64);
+            let mut k = first;
+            while k < first + n {
+                let m = ((first + n - k) as usize).min(BEAM);
+                if batch.len + m > batch_max {
+                    flush(&mut batch)?;
+                }
+                for j in 0..m {
+                    let b = batch.len;
+                    (batch.s[b], batch.rays[b], batch.t_max[b], batch.weight[b]) =
+                        self.camera_sample(pixel_key, x0 + x, y, k + j as u32);
+                    batch.x[b] = x;
+                    batch.len += 1;
+                }
+                k += m as u32;
+            }
+        }
+        if batch.len > 0 {
+            flush(&mut batch)?;
+        }
+        Ok(())
     }
 }
 
@@ -546,6 +594,18 @@ mod tests {
             assert_eq!(a.image, c.image, "passes of {pass} against passes of 16");
         }
         assert_eq!(a.image, render(&alone, 1).image, "paths alone, passes of 1");
+        // Passes of 29 samples make units of work of 35 pixels (`UNIT`):
+        // each row two segments, the second of one pixel.
+        assert_eq!(super::UNIT / 29, 35);
+        let rows = |pass: u32| {
+            let st = in_step
+                .render_range(7, 0..40, true, Some(pass), &NoProgress)
+                .unwrap();
+            st.finish(40)
+        };
+        let (whole, split) = (rows(1), rows(29));
+        assert_eq!(whole.image, split.image, "rows in segments");
+        assert_eq!(whole.variance, split.variance, "rows in segments");
         // In a scene with a medium, the paths go on alone.
         desc.media.push(fgf_scene::MediumDesc::Homogeneous {
             sigma_t: [1.5; 3],
