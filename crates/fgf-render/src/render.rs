@@ -159,7 +159,9 @@ impl Prepared {
             let first = next;
             // Each row in segments of about `UNIT` samples, the units of
             // work: a pass ends when its last unit does, and small units
-            // leave a thread idle for less at the end of each pass.
+            // leave a thread idle for less at the end of each pass; and the
+            // threads then work on nearby pixels, whose rays read much the
+            // same scene data (docs/benchmarks.md).
             let seg = (UNIT / n as usize).clamp(1, w);
             rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
                 |(y, (row, pend), sq)| {
@@ -220,9 +222,13 @@ fn default_pass(pixels: usize) -> u32 {
     }
 }
 
-/// Samples in a unit of work of a pass (a segment of a row; a whole row
-/// where a pixel's samples of the pass are this many or more).
-const UNIT: usize = 1024;
+/// Samples in a unit of work of a pass: a segment of a row of
+/// `UNIT / n` pixels for `n` samples a pixel (a whole row where that is
+/// wider; one pixel where `n >= UNIT`). Chosen by paired timings: 1024,
+/// 512, 256 and 128 took the mesh scene at 256² about 0.95, 0.92, 0.90 and
+/// 0.90 of the time of whole rows (paired ratios chained), but 256 made the heterogeneous cube
+/// 1 % slower than 1024 and 512 did not (docs/benchmarks.md).
+const UNIT: usize = 512;
 
 impl Prepared {
     /// Samples `first..first + n` of the pixels `x0..x0 + pend.len()` of
@@ -594,9 +600,9 @@ mod tests {
             assert_eq!(a.image, c.image, "passes of {pass} against passes of 16");
         }
         assert_eq!(a.image, render(&alone, 1).image, "paths alone, passes of 1");
-        // Passes of 29 samples make units of work of 35 pixels (`UNIT`):
-        // each row two segments, the second of one pixel.
-        assert_eq!(super::UNIT / 29, 35);
+        // Passes of 29 samples make units of work of 17 pixels (`UNIT`):
+        // each row of 36 three segments, the last of two pixels.
+        assert_eq!(super::UNIT / 29, 17);
         let rows = |pass: u32| {
             let st = in_step
                 .render_range(7, 0..40, true, Some(pass), &NoProgress)
