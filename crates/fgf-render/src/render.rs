@@ -158,10 +158,11 @@ impl Prepared {
             let n = per_pass.min(samples.end - next);
             let first = next;
             // Each row in segments of about `UNIT` samples, the units of
-            // work: a pass ends when its last unit does, and small units
-            // leave a thread idle for less at the end of each pass; and the
-            // threads then work on nearby pixels, whose rays read much the
-            // same scene data (docs/benchmarks.md).
+            // work, split within the row's task: a pass ends when its last
+            // unit does, and small units leave a thread idle for less at
+            // its end. (The gain on the mesh is larger than that wait, and
+            // one flat list of the image's segments was slower; why is not
+            // established: docs/benchmarks.md.)
             let seg = (UNIT / n as usize).clamp(1, w);
             rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
                 |(y, (row, pend), sq)| {
