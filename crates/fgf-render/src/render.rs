@@ -1,11 +1,12 @@
 //! The public entry point: [`render`] a [`SceneDesc`] into an RGB image.
 //!
 //! * Samples are taken in *passes*: each pass adds the same number of
-//!   samples to every pixel, over rows rendered in parallel by rayon. Between
-//!   passes the job checks [`Progress::cancelled`]; on cancellation it returns
-//!   [`RenderError::Cancelled`] with the image of the passes completed and
-//!   the number of samples per pixel it holds (`spp_done`, equal for all
-//!   pixels).
+//!   samples to every pixel, over rows rendered in parallel by rayon. The
+//!   job checks [`Progress::cancelled`] between passes, and within the long
+//!   passes of small films before each unit of work (a pass cut short is
+//!   undone); on cancellation it returns [`RenderError::Cancelled`] with the
+//!   image of the passes completed and the number of samples per pixel it
+//!   holds (`spp_done`, equal for all pixels).
 //! * Sample `k` of pixel `i` uses a random stream derived from
 //!   `(seed, i, k)` only, and pixels sum their samples exactly in fixed
 //!   point ([`crate::film::Fixed`], `docs/theory.md` §7.17), so the image is
@@ -49,11 +50,13 @@ pub struct RenderOptions {
     pub seed: Option<u64>,
     /// Also return the per-pixel variance of the pixel mean.
     pub variance: bool,
-    /// Samples per pixel per pass (default: chosen so a pass holds about
-    /// 2¹⁸ samples, or 16 samples per pixel if that stays within 2²⁰; it
-    /// does not change the image, only how often cancellation is checked
+    /// Samples per pixel per pass (default: on films of up to 2¹⁸ pixels
+    /// a short first pass, then passes of up to 256 samples a pixel; on
+    /// larger films passes of about 2¹⁸ samples).
+    /// It does not change the image, only how often cancellation is
+    /// checked, how many samples of a pixel are traced one after another,
     /// and whether the camera rays traced as one beam are a pixel's or
-    /// those of neighbouring pixels).
+    /// those of neighbouring pixels.
     pub spp_per_pass: Option<u32>,
 }
 
@@ -102,15 +105,32 @@ impl Prepared {
     /// every pixel with `seed`, their squares too if `variance`. Merging the
     /// states of disjoint ranges gives the bits of one render of their union.
     ///
-    /// On cancellation (checked between passes) the state of the passes
-    /// finished is returned: its `samples` is then less than the range's
-    /// length, and it holds the samples `s0..s0 + samples`.
+    /// On cancellation (checked between passes, and within the long passes
+    /// of [`Passes`]) the state of the passes finished is returned: its
+    /// `samples` is then less than the range's length, and it holds the
+    /// samples `s0..s0 + samples`.
     pub fn render_range(
         &self,
         seed: u64,
         samples: Range<u32>,
         variance: bool,
         spp_per_pass: Option<u32>,
+        progress: &dyn Progress,
+    ) -> Result<FilmState, RenderError> {
+        let passes = match spp_per_pass {
+            Some(n) => Passes::even(n),
+            None => Passes::default_for(self.width * self.height),
+        };
+        self.render_passes(seed, samples, variance, passes, progress)
+    }
+
+    /// [`Self::render_range`] in the passes `passes`.
+    fn render_passes(
+        &self,
+        seed: u64,
+        samples: Range<u32>,
+        variance: bool,
+        passes: Passes,
         progress: &dyn Progress,
     ) -> Result<FilmState, RenderError> {
         if samples.start >= samples.end {
@@ -120,10 +140,6 @@ impl Prepared {
             )));
         }
         let (w, h) = (self.width, self.height);
-        let count = samples.end - samples.start;
-        let per_pass = spp_per_pass
-            .unwrap_or_else(|| default_pass(w * h))
-            .clamp(1, count);
         let mut state = FilmState::new(w, h, variance);
         // Exact f64 partial sums of the samples not yet in `state`
         // (`film::accumulate_pending`), moved into it at the end.
@@ -155,8 +171,24 @@ impl Prepared {
             if progress.cancelled() {
                 break;
             }
-            let n = per_pass.min(samples.end - next);
+            let per_pass = if next == samples.start {
+                passes.first
+            } else {
+                passes.rest
+            };
+            let n = per_pass.clamp(1, samples.end - next);
             let first = next;
+            // A long pass is cancellable before each unit of work; cut
+            // short, it is undone from this copy of the sums.
+            let within = passes.within(w * h, n);
+            let saved = within.then(|| {
+                (
+                    state.sum.clone(),
+                    state.sum_sq.clone(),
+                    pending.clone(),
+                    pending_sq.clone(),
+                )
+            });
             // Each row in segments of about `UNIT` samples, the units of
             // work, split within the row's task: a pass ends when its last
             // unit does, and small units leave a thread idle for less at
@@ -164,7 +196,7 @@ impl Prepared {
             // one flat list of the image's segments was slower; why is not
             // established: docs/benchmarks.md.)
             let seg = (UNIT / n as usize).clamp(1, w);
-            rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
+            let pass = rows(&mut state, &mut pending, &mut pending_sq, w).try_for_each(
                 |(y, (row, pend), sq)| {
                     let sq_segs: Vec<_> = match sq {
                         Some((a, b)) => a
@@ -179,6 +211,9 @@ impl Prepared {
                         .zip(sq_segs.into_par_iter())
                         .enumerate()
                         .try_for_each(|(i, ((row, pend), sq))| {
+                            if within && progress.cancelled() {
+                                return Err(PassEnd::Cancelled);
+                            }
                             let x0 = i * seg;
                             self.render_segment(
                                 (seed_key, first, n),
@@ -186,12 +221,22 @@ impl Prepared {
                                 (row, pend, sq),
                                 (lone_envmap, beams, batch_max),
                             )
-                            .map_err(|(x, e)| out_of_range(x, y, e))?;
+                            .map_err(|(x, e)| PassEnd::Failed(out_of_range(x, y, e)))?;
                             progress.inc((pend.len() as u64) * n as u64);
-                            Ok::<(), RenderError>(())
+                            Ok(())
                         })
                 },
-            )?;
+            );
+            match pass {
+                Ok(()) => {}
+                Err(PassEnd::Failed(e)) => return Err(e),
+                Err(PassEnd::Cancelled) => {
+                    if let Some((sum, sum_sq, p, p_sq)) = saved {
+                        (state.sum, state.sum_sq, pending, pending_sq) = (sum, sum_sq, p, p_sq);
+                    }
+                    break;
+                }
+            }
             next += n;
             state.samples += n as u64;
         }
@@ -211,12 +256,86 @@ impl Prepared {
     }
 }
 
-/// Samples per pixel per pass for `pixels` pixels by default: about 2¹⁸
-/// samples a pass, so that cancellation is checked often, but a full beam
-/// of camera rays per pixel ([`BEAM`]) where that keeps a pass within 2²⁰.
-fn default_pass(pixels: usize) -> u32 {
-    let fit = (1usize << 18) / pixels;
-    if fit < BEAM && BEAM * pixels <= 1 << 20 {
+/// How a pass of [`Prepared::render_passes`] ends early.
+enum PassEnd {
+    Failed(RenderError),
+    /// Cancelled within a long pass ([`Passes::within`]).
+    Cancelled,
+}
+
+/// How [`Prepared::render_range`] splits its samples into passes: `first`
+/// samples a pixel in the first pass, `rest` in each later one (the last
+/// may hold fewer); on films of up to [`LONG_PASS_PIXELS`], a pass of more
+/// than `within_over` samples is cancellable within.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct Passes {
+    first: u32,
+    rest: u32,
+    within_over: usize,
+}
+
+/// Films of at most this many pixels take long passes by default, and a
+/// pass of theirs holding more than [`SHORT_PASS_MAX`] samples is
+/// cancellable within: it keeps a copy of the sums (at most about 25 MB,
+/// 50 MB with variances) to undo a pass cut short.
+const LONG_PASS_PIXELS: usize = 1 << 18;
+/// Samples a default long pass holds at most (as much work as a
+/// cancellation within it can throw away: about 5 s of the mesh scene on
+/// two cores).
+const LONG_PASS: usize = 1 << 24;
+/// Samples of a pixel a default long pass takes at most: a pixel's samples
+/// traced one after another (a unit of work is then two pixels,
+/// [`UNIT`]) find more of what they read in the caches. Passes of 256
+/// against 16 took the mesh scene at 256² 0.935–0.978 of the time, and
+/// beyond 256 gained nothing more (docs/benchmarks.md).
+const LOCAL_SPP: usize = 256;
+/// The most samples of a short pass, which is cancelled only between
+/// passes.
+const SHORT_PASS_MAX: usize = 1 << 20;
+
+impl Passes {
+    /// Every pass `n` samples a pixel.
+    fn even(n: u32) -> Passes {
+        Passes {
+            first: n,
+            rest: n,
+            within_over: SHORT_PASS_MAX,
+        }
+    }
+
+    /// The default for a film of `pixels` pixels. Films of up to
+    /// [`LONG_PASS_PIXELS`]: a short first pass ([`short_pass`], so that
+    /// an early interrupt still leaves an image), then long passes of
+    /// `2²⁴ / pixels` samples a pixel, at most [`LOCAL_SPP`] (256 at 256²,
+    /// 64 at 512²). Larger films: short passes only.
+    fn default_for(pixels: usize) -> Passes {
+        let short = short_pass(pixels);
+        let rest = if pixels <= LONG_PASS_PIXELS {
+            (LONG_PASS / pixels.max(1)).min(LOCAL_SPP) as u32
+        } else {
+            short
+        };
+        Passes {
+            first: short,
+            rest,
+            within_over: SHORT_PASS_MAX,
+        }
+    }
+
+    /// A pass of `n` samples a pixel over `pixels` pixels is cancellable
+    /// within (and undone if cut short).
+    fn within(self, pixels: usize, n: u32) -> bool {
+        pixels <= LONG_PASS_PIXELS && n as usize * pixels > self.within_over
+    }
+}
+
+/// Samples per pixel of a short pass for `pixels` pixels: about 2¹⁸
+/// samples, so that cancellation between passes is checked often, but a
+/// full beam of camera rays per pixel ([`BEAM`]) where that keeps a pass
+/// within [`SHORT_PASS_MAX`].
+fn short_pass(pixels: usize) -> u32 {
+    let fit = (1usize << 18) / pixels.max(1);
+    if fit < BEAM && BEAM * pixels <= SHORT_PASS_MAX {
         BEAM as u32
     } else {
         fit.clamp(1, 64) as u32
@@ -795,5 +914,94 @@ mod tests {
             Fixed::from_f64(-f64::powi(2.0, -96)).unwrap().0,
             [u64::MAX; 3]
         );
+    }
+
+    /// The default passes by film size: a short first pass, then long
+    /// passes of `2²⁴ / pixels` samples a pixel up to 256 on films of up to
+    /// 2¹⁸ pixels, cancellable within where they hold more than 2²⁰
+    /// samples; short passes alone on larger films.
+    #[test]
+    fn default_passes_by_film_size() {
+        use super::Passes;
+        let p = |pixels: usize| {
+            let d = Passes::default_for(pixels);
+            (d.first, d.rest, d.within(pixels, d.rest))
+        };
+        assert_eq!(p(36 * 28), (64, 256, false));
+        assert_eq!(p(64 * 64), (64, 256, false));
+        assert_eq!(p(256 * 256), (16, 256, true));
+        assert_eq!(p(512 * 512), (1, 64, true));
+        assert_eq!(p(1024 * 1024), (1, 1, false));
+        assert_eq!(p(4096 * 4096), (1, 1, false));
+        assert!(!Passes::even(4).within(256 * 256, 16));
+        assert!(!Passes::even(4).within(1024 * 1024, 16));
+    }
+
+    /// Cancels once more than `after` samples have been reported.
+    struct CancelAfter(std::sync::atomic::AtomicU64, u64);
+    impl fgf_core::Progress for CancelAfter {
+        fn inc(&self, n: u64) {
+            self.0.fetch_add(n, std::sync::atomic::Ordering::Relaxed);
+        }
+        fn cancelled(&self) -> bool {
+            self.0.load(std::sync::atomic::Ordering::Relaxed) > self.1
+        }
+    }
+
+    /// A pass cancelled within, after some of its units of work, is undone:
+    /// the state holds the passes finished before it, bit for bit those of
+    /// an uninterrupted render of their samples, and a cut first pass
+    /// leaves none.
+    #[test]
+    fn a_pass_cut_short_is_undone() {
+        let xml = r#"<scene version="3.0.0">
+            <integrator type="path"><integer name="max_depth" value="4"/></integrator>
+            <sensor type="perspective">
+                <float name="fov" value="50"/>
+                <transform name="to_world"><lookat origin="0, 2, -3" target="0, 0, 0" up="0, 1, 0"/></transform>
+                <sampler type="independent"><integer name="sample_count" value="8"/></sampler>
+                <film type="hdrfilm"><integer name="width" value="16"/><integer name="height" value="8"/></film>
+            </sensor>
+            <emitter type="constant"><rgb name="radiance" value="0.7"/></emitter>
+            <shape type="rectangle">
+                <transform name="to_world"><rotate x="1" angle="-90"/><scale value="2"/></transform>
+                <bsdf type="diffuse"/>
+            </shape>
+            <shape type="sphere"><float name="radius" value="0.5"/><bsdf type="roughplastic"/></shape>
+        </scene>"#;
+        let desc = fgf_scene::load_str(xml, "test.xml", ".".as_ref(), &[]).unwrap();
+        let p = Prepared::new(&desc).unwrap();
+        // Every pass cancellable within; a pass of 8 samples is one unit
+        // of work a row (8 units), of 2 samples too.
+        let passes = super::Passes {
+            first: 2,
+            rest: 8,
+            within_over: 0,
+        };
+        let pixels = 16 * 8;
+        let done = |after: u64| {
+            let c = CancelAfter(std::sync::atomic::AtomicU64::new(0), after);
+            let st = p.render_passes(5, 0..26, true, passes, &c).unwrap();
+            (st, c.0.into_inner())
+        };
+        // Cut after one unit of the second pass: the first pass's samples.
+        let (cut, reported) = done(2 * pixels);
+        assert_eq!(cut.samples, 2);
+        assert!(
+            reported > 2 * pixels && reported < 10 * pixels,
+            "{reported}"
+        );
+        let first = p.render_range(5, 0..2, true, None, &NoProgress).unwrap();
+        assert_eq!((cut.sum, cut.sum_sq), (first.sum.clone(), first.sum_sq));
+        // Cut after one unit of the first pass: nothing.
+        let (none, _) = done(0);
+        assert_eq!(none.samples, 0);
+        assert!(none.sum.iter().all(|v| *v == Fixed::default()));
+        // Not cut: all 26, as in passes of 1.
+        let (all, _) = done(u64::MAX);
+        let ones = p
+            .render_range(5, 0..26, true, Some(1), &NoProgress)
+            .unwrap();
+        assert_eq!((all.samples, all.sum), (26, ones.sum));
     }
 }
