@@ -160,7 +160,7 @@ def render(
     OSError
         A file cannot be read.
     KeyboardInterrupt
-        On Ctrl-C, after the pass of samples in flight finishes (the CLI
+        On Ctrl-C, after the units of work in flight finish (the CLI
         instead writes the partial image; use it for long interruptible
         renders).
     fgf.cluster.ClusterError

@@ -4,9 +4,10 @@
                [-D name=value]... [--variance var.exr] [--png out.png] [--quiet]
                [--cluster local[:N]|tcp://host:port] [--chunk-spp K] [--checkpoint FILE]
 
-Ctrl-C stops after the pass of samples in flight (on a cluster: cancels the
-chunks not finished) and writes the image of the samples finished so far
-(every pixel has the same count), saying how many; the exit code is then
+Ctrl-C stops after the units of work in flight (a long pass cut short is
+dropped; on a cluster: cancels the chunks not finished) and writes the image
+of the passes finished so far (every pixel has the same count), saying how
+many; the exit code is then
 130. With ``--cluster`` the samples are split into chunks of ``--chunk-spp``
 rendered by Dask workers; with ``--checkpoint`` finished chunks are saved as
 they arrive and a rerun resumes. The image has the same bits either way
