@@ -52,7 +52,7 @@ pub struct RenderOptions {
     pub variance: bool,
     /// Samples per pixel per pass (default: on films of up to 2¹⁸ pixels
     /// a short first pass, then passes of up to 256 samples a pixel; on
-    /// larger films passes of about 2¹⁸ samples).
+    /// larger films passes of one sample a pixel).
     /// It does not change the image, only how often cancellation is
     /// checked, how many samples of a pixel are traced one after another,
     /// and whether the camera rays traced as one beam are a pixel's or
