@@ -629,10 +629,10 @@ fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool 
 }
 
 /// [`slab_hit`] for a ray whose `inv_d` is finite (a beam's, see
-/// [`Beam::new`]), where no product is NaN: fewer instructions, for the
-/// test each ray of a beam makes per leaf.
-#[inline(always)]
-pub(super) fn slab_hit_finite(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
+/// [`Beam::new`]), where no product is NaN: the one-ray form of
+/// [`slab_hit_finite8`], which the tests hold it to.
+#[cfg(test)]
+fn slab_hit_finite(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
     let t0 = (min - o) * inv_d;
     let t1 = (max - o) * inv_d;
     let tn = t0.min(t1).max_element();
@@ -640,6 +640,34 @@ pub(super) fn slab_hit_finite(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_
     let tn = if tn > 0.0 { tn } else { 0.0 };
     let tf = if tf < t_max { tf } else { t_max };
     !(tn > tf * 1.000_000_4)
+}
+
+/// The slab test of eight rays whose inverse directions are finite (a
+/// beam's, see [`Beam::new`]: no product is NaN), origins `o`, inverse
+/// directions `inv_d` and limits `t_max` in lanes, against the box
+/// `[min, max]`: the mask of the lanes that may hit it, each by the
+/// operations of [`slab_hit`] clipped to `[0, t_max]` (so with the answer
+/// of the ray's own test, `slab_hit_finite` in the tests).
+#[inline(always)]
+pub(super) fn slab_hit_finite8(
+    min: Vec3A,
+    max: Vec3A,
+    o: &[F8; 3],
+    inv_d: &[F8; 3],
+    t_max: F8,
+) -> u32 {
+    let t = |b: Vec3A, a: usize| F8::splat(b[a]).sub(o[a]).mul(inv_d[a]);
+    let (t0, t1) = (
+        [t(min, 0), t(min, 1), t(min, 2)],
+        [t(max, 0), t(max, 1), t(max, 2)],
+    );
+    let lo = |a: usize| t0[a].min(t1[a]);
+    let hi = |a: usize| t0[a].max(t1[a]);
+    let (tn, tf) = (lo(0).max(lo(1)).max(lo(2)), hi(0).min(hi(1)).min(hi(2)));
+    let zero = F8::splat(0.0);
+    let tn = zero.lt(tn).select(tn, zero);
+    let tf = tf.lt(t_max).select(tf, t_max);
+    tn.le(tf.mul(F8::splat(1.000_000_4))).bitmask()
 }
 
 fn build_rec(
@@ -786,6 +814,64 @@ mod tests {
                 assert_eq!(b.intersect(o, inv, f32::INFINITY).is_some(), want, "{msg}");
             }
         }
+    }
+
+    /// The slab test of eight rays at once gives each lane the answer of
+    /// that ray's own test, also for boxes the rays only graze (random
+    /// boxes, rays aimed at a box's corner or at a point just beside it,
+    /// some limits that end before the box): a beam's rays skip exactly
+    /// the leaves they would skip alone.
+    #[test]
+    fn slab_test_of_eight_rays_is_each_rays_own() {
+        let mut s = crate::math::Sampler::new(11, 0, 0);
+        let mut v = || Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d());
+        let (mut hits, mut misses) = (0, 0);
+        for k in 0..4000 {
+            let (c, h) = (v() * 4.0, v() * 0.5 + Vec3A::splat(1e-3));
+            let (min, max) = (c - h, c + h);
+            let (mut o, mut inv, mut lim) = ([[0f32; 8]; 3], [[0f32; 8]; 3], [0f32; 8]);
+            let mut want = 0u32;
+            for l in 0..8 {
+                let origin = v() * 8.0 - Vec3A::splat(2.0);
+                // A corner, or a point near the box, give or take an ulp-sized nudge.
+                let corner = Vec3A::select(v().cmplt(Vec3A::splat(0.5)), min, max);
+                let aim = if l % 2 == 0 {
+                    corner
+                } else {
+                    c + (v() - 0.5) * 2.2 * h
+                };
+                let aim = aim + (v() - 0.5) * 1e-6 * (k % 3) as f32;
+                let d = (aim - origin).normalize();
+                let i = d.recip();
+                if !i.is_finite() {
+                    continue;
+                }
+                let t_max = if l % 3 == 0 {
+                    (aim - origin).length() * (0.5 + v().x)
+                } else {
+                    1e4
+                };
+                for a in 0..3 {
+                    (o[a][l], inv[a][l]) = (origin[a], i[a]);
+                }
+                lim[l] = t_max;
+                want |= u32::from(slab_hit_finite(min, max, origin, i, t_max)) << l;
+            }
+            let got = slab_hit_finite8(
+                min,
+                max,
+                &o.map(F8::from_array),
+                &inv.map(F8::from_array),
+                F8::from_array(lim),
+            );
+            // Lanes left empty (a direction with no finite inverse) have
+            // a limit of 0 and an origin of 0; only compare the filled ones.
+            let filled = (0..8).filter(|&l| lim[l] > 0.0).fold(0, |m, l| m | 1 << l);
+            assert_eq!(got & filled, want, "box {k}");
+            hits += want.count_ones();
+            misses += (filled & !want).count_ones();
+        }
+        assert!(hits > 8000 && misses > 8000, "hits {hits}, misses {misses}");
     }
 
     /// Every primitive whose box the ray crosses is visited (compared with

@@ -8,7 +8,7 @@ use super::types::{
     Corners, Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI,
 };
 use super::Geometry;
-use crate::lanes::prefetch;
+use crate::lanes::{prefetch, F8};
 use crate::ray::Ray;
 use glam::Vec3A;
 
@@ -184,28 +184,50 @@ impl Geometry {
             }
             return;
         };
+        // Lanes past the last ray hold a limit of 0 and are masked off.
         let mut limit = [0f32; BEAM];
         limit[..n].copy_from_slice(t_max);
         let mut best: [Option<(u32, f32, f32, f32)>; BEAM] = [None; BEAM];
         let greatest = |limit: &[f32]| limit.iter().fold(0f32, |a, &b| a.max(b));
+        // The rays eight to a group, their origins and inverse directions
+        // in lanes, for the leaf box tests.
+        const G: usize = BEAM / 8;
+        const _: () = assert!(BEAM % 8 == 0);
+        let (mut o, mut inv) = ([[[0f32; 8]; 3]; G], [[[0f32; 8]; 3]; G]);
+        for j in 0..n {
+            for c in 0..3 {
+                (o[j / 8][c][j % 8], inv[j / 8][c][j % 8]) = (rays[j].o[c], inv_d[j][c]);
+            }
+        }
+        let (o8, inv8) = (
+            o.map(|g| g.map(F8::from_array)),
+            inv.map(|g| g.map(F8::from_array)),
+        );
+        let groups = n.div_ceil(8);
         self.bvh.traverse_leaves_beam(
             &beam,
             greatest(&limit[..n]),
             #[inline(always)]
             |start, count, _| {
-                for j in 0..n {
+                for g in 0..groups {
                     // The rays of the beam that miss the leaf's box skip it.
-                    if !self.bvh.leaf_may_hit(start, rays[j].o, inv_d[j], limit[j]) {
-                        continue;
+                    let mut lim = [0f32; 8];
+                    lim.copy_from_slice(&limit[g * 8..g * 8 + 8]);
+                    let lim = F8::from_array(lim);
+                    let valid = (1u32 << (n - g * 8).min(8)) - 1;
+                    let mut may = self.bvh.leaf_may_hit8(start, &o8[g], &inv8[g], lim) & valid;
+                    while may != 0 {
+                        let j = g * 8 + may.trailing_zeros() as usize;
+                        may &= may - 1;
+                        self.leaf_hits::<true>(
+                            &rays[j],
+                            start,
+                            count,
+                            &mut limit[j],
+                            #[inline(always)]
+                            |p, t, u, v| keep_nearest(&mut best[j], t_max[j], (p, t, u, v)),
+                        );
                     }
-                    self.leaf_hits::<true>(
-                        &rays[j],
-                        start,
-                        count,
-                        &mut limit[j],
-                        #[inline(always)]
-                        |p, t, u, v| keep_nearest(&mut best[j], t_max[j], (p, t, u, v)),
-                    );
                 }
                 greatest(&limit[..n])
             },

@@ -15,13 +15,15 @@
 //! sign along an axis, or are 0, has no beam ([`Beam::new`] returns
 //! `None`); its rays are traced one by one.
 //!
-//! The leaves are tested ray by ray (`Geometry::intersect_beam`), with the
-//! same code as a single ray, so every ray gets the nearest hit it would
-//! get alone: the same distance and primitive (of primitives hit at
+//! At a leaf, the rays test its box eight at a time ([`Bvh::leaf_may_hit8`],
+//! each lane by the operations of the ray's own test), and those that may
+//! hit it test its primitives one by one, with the same code as a single
+//! ray (`Geometry::intersect_beam`), so every ray gets the nearest hit it
+//! would get alone: the same distance and primitive (of primitives hit at
 //! exactly the same distance, both keep the least id, whatever order the
 //! leaves come in).
 
-use super::{slab_hit_finite, slab_planes, Bvh, F8, PACK, STACK};
+use super::{slab_hit_finite8, slab_planes, Bvh, F8, PACK, STACK};
 use crate::ray::Ray;
 use glam::Vec3A;
 
@@ -110,15 +112,15 @@ impl Bvh {
         }
     }
 
-    /// Whether the ray `o + t d` (`inv_d = d.recip()`) may hit the box of
-    /// the leaf starting at primitive `start` before `t_max`: the test a
-    /// single ray makes before it visits the leaf, made by each ray of a
-    /// beam that visits it (whose `inv_d` is finite, as [`Beam::new`]
-    /// requires).
+    /// Which of eight rays of a beam (origins `o`, inverse directions
+    /// `inv_d`, all finite as [`Beam::new`] requires, and limits `t_max`,
+    /// in lanes) may hit the box of the leaf starting at primitive `start`
+    /// before their limits: the mask of those lanes. Each lane gets the
+    /// answer of the ray's own slab test (`slab_hit_finite8`).
     #[inline(always)]
-    pub fn leaf_may_hit(&self, start: u32, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
+    pub(crate) fn leaf_may_hit8(&self, start: u32, o: &[F8; 3], inv_d: &[F8; 3], t_max: F8) -> u32 {
         let b = &self.leaf_boxes[start as usize / PACK];
-        slab_hit_finite(b.min, b.max, o, inv_d, t_max)
+        slab_hit_finite8(b.min, b.max, o, inv_d, t_max)
     }
 
     /// [`Bvh::walk`] for a beam: the same order and culling, with the
