@@ -60,6 +60,17 @@ enum Known<T> {
     Hit(T),
 }
 
+/// A placeholder for the hits of paths whose next hit is not found yet.
+const NO_HIT: Hit = Hit {
+    t: 0.0,
+    p: Vec3A::ZERO,
+    n: Vec3A::ZERO,
+    ns: Vec3A::ZERO,
+    shape: 0,
+    prim: 0,
+    bary: [0.0; 2],
+};
+
 /// A path between its interactions: what the stages of
 /// [`World::li_beam`] carry from one to the next. (Without media, the
 /// spectral MIS factor `1 / mean(r_u)` of [`World::li_path`] is 1 and is
@@ -68,8 +79,9 @@ struct PathState {
     ray: Ray,
     /// The limit of `ray` (finite only for the camera ray, at `far_clip`).
     t_max: f32,
-    /// The nearest hit of `ray`, when a previous query already found it.
-    known: Known<Hit>,
+    /// Whether a query already found the nearest hit of `ray` (a hit is
+    /// kept apart from the path, in the hits of [`World::li_beam`]).
+    known: Known<()>,
     /// The radiance gathered so far.
     l: Spectrum,
     thr: Spectrum,
@@ -86,10 +98,10 @@ struct PathState {
 }
 
 /// A surface interaction at which a path scatters, as
-/// [`World::path_advance`] finds it and [`World::path_scatter`] uses it:
-/// the hit, its BSDF made concrete there, and its local frame.
+/// [`World::path_advance`] finds it and [`World::path_scatter`] uses it
+/// (with the hit): its shape, its BSDF made concrete there, and its local
+/// frame.
 struct SurfaceStop<'w> {
-    h: Hit,
     info: ShapeInfo,
     bsdf: HitBsdf<'w>,
     frame: Frame,
@@ -275,12 +287,17 @@ impl World {
         debug_assert!(self.takes_first_hit() && self.lone_envmap().is_some());
         let m = rays.len().min(STEP);
         let mut paths: [Option<PathState>; STEP] = std::array::from_fn(|_| None);
+        // Each path's next hit, where its `known` says it is found.
+        let mut hits = [NO_HIT; STEP];
         // The paths that go on (a mask of lanes: the loops below visit
         // only those, not all 64 while the last few paths finish).
         let mut live = 0u64;
         for j in 0..m {
             let known = match first[j] {
-                Some(h) => Known::Hit(h),
+                Some(h) => {
+                    hits[j] = h;
+                    Known::Hit(())
+                }
                 None => Known::Miss,
             };
             paths[j] = self.path_start(rays[j], t_max[j], known, &mut s[j]);
@@ -301,11 +318,11 @@ impl World {
         while live != 0 {
             // `surface`: the paths at a surface interaction this round.
             let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u64);
-            self.walk_all(&mut paths, live);
+            self.walk_all(&mut paths, &mut hits, live);
             for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
                 // (Written in place: a stop is some 300 bytes.)
-                stops[j] = self.path_advance(st);
+                stops[j] = self.path_advance(st, &hits[j]);
                 match &stops[j] {
                     None => {
                         out[j] = st.l;
@@ -464,7 +481,7 @@ impl World {
                     ls => NeeLight::Drawn(ls),
                 };
                 let sample = (sampled >> j & 1 != 0).then_some(bs[j]);
-                if !self.path_scatter(st, stop, nee, sample, &mut s[j]) {
+                if !self.path_scatter(st, &hits[j], stop, nee, sample, &mut s[j]) {
                     out[j] = st.l;
                     paths[j] = None;
                     live &= !(1 << j);
@@ -483,7 +500,7 @@ impl World {
     /// hits as [`Self::path_advance`]'s own query, which scenes with
     /// `null` boundaries need and which [`Self::li_beam`] does not serve.)
     #[inline(always)]
-    fn walk_all(&self, paths: &mut [Option<PathState>; STEP], live: u64) {
+    fn walk_all(&self, paths: &mut [Option<PathState>; STEP], hits: &mut [Hit; STEP], live: u64) {
         let geom = &self.geom;
         let mut rec: [Option<HitRecord>; STEP] = [None; STEP];
         let mut walked = 0u64;
@@ -505,7 +522,10 @@ impl World {
         for j in lanes_of(walked) {
             let Some(st) = &mut paths[j] else { continue };
             st.known = match rec[j] {
-                Some(r) => Known::Hit(geom.make_hit(&st.ray, r)),
+                Some(r) => {
+                    hits[j] = geom.make_hit(&st.ray, r);
+                    Known::Hit(())
+                }
                 None => Known::Miss,
             };
         }
@@ -755,7 +775,7 @@ impl World {
         &self,
         ray: Ray,
         t_max_primary: f32,
-        known: Known<Hit>,
+        known: Known<()>,
         s: &mut Sampler,
     ) -> Option<PathState> {
         if self.max_depth == 0 {
@@ -779,115 +799,58 @@ impl World {
         })
     }
 
-    /// Follow a path of [`Self::li_beam`] (a scene without media) to its
-    /// next scattering at a surface: through null boundaries and emission
-    /// found on the way. `None` when the path ends first; then `st.l` is
-    /// its radiance. A path that escapes to the environment map stops with
-    /// [`Stop::Escaped`], before its radiance is looked up. (The same
-    /// steps as [`Self::li_path`]'s, which also has the media's.)
+    /// Follow a path of [`Self::li_beam`] to its next scattering at a
+    /// surface, at its hit `h` if its `known` says there is one. `None`
+    /// when the path ends first; then `st.l` is its radiance. A path that
+    /// escapes to the environment map stops with [`Stop::Escaped`], before
+    /// its radiance is looked up. (The same steps as [`Self::li_path`]'s
+    /// in the scenes `li_beam` renders, which have no media, no `null`
+    /// boundaries and no emitter but the environment map.)
     #[inline(always)]
-    fn path_advance<'w>(&'w self, st: &mut PathState) -> Option<Stop<'w>> {
-        loop {
-            // Invariant loads from the world are made here, at their use,
-            // not hoisted before the loop: hoisted, they were spilled to the
-            // stack in the prologue of every call (~90 instructions per
-            // sample), while most paths make only a few iterations.
-            let world = std::hint::black_box(self);
-            let ray = st.ray;
-            // `after`: what the query says of the ray continued through `hit`.
-            let (hit, after) = match std::mem::replace(&mut st.known, Known::Unknown) {
-                Known::Hit(h) => (Some(h), Known::Unknown),
-                Known::Miss => (None, Known::Unknown),
-                Known::Unknown if world.any_null => {
-                    let (h1, h2) = world.geom.intersect2(&ray, st.t_max);
-                    let after = match h2 {
-                        Some(r) => Known::Hit(r),
-                        None if st.t_max == f32::INFINITY => Known::Miss,
-                        // No second hit below a finite t_max says nothing
-                        // of what lies beyond it.
-                        None => Known::Unknown,
-                    };
-                    (h1, after)
-                }
-                Known::Unknown => (world.geom.intersect(&ray, st.t_max), Known::Unknown),
-            };
-            st.t_max = f32::INFINITY;
-            let Some(h) = hit else {
+    fn path_advance<'w>(&'w self, st: &mut PathState, h: &Hit) -> Option<Stop<'w>> {
+        // Invariant loads from the world are made here, at their use,
+        // not hoisted out of `li_beam`'s loops: hoisted, they were spilled
+        // to the stack (~90 instructions per sample).
+        let world = std::hint::black_box(self);
+        debug_assert!(!world.any_null && world.media.is_empty());
+        st.t_max = f32::INFINITY;
+        match std::mem::replace(&mut st.known, Known::Unknown) {
+            Known::Hit(()) => {}
+            Known::Miss => {
                 // Escaped: the environment, if any.
                 if world.env.is_some() && !(st.depth == 0 && world.hide_emitters) {
                     return Some(Stop::Escaped);
                 }
                 return None;
-            };
-            let info = world.shapes[h.shape as usize];
-            // Emission of an area light seen from its front side (that of
-            // the shading normal, as in `Emitter::sample`).
-            if let Some(e) = info.emitter {
-                if !(st.depth == 0 && world.hide_emitters) && h.ns.dot(ray.d) < 0.0 {
-                    let em = &world.emitters[e as usize];
-                    if let Some(shape) = em.area_shape() {
-                        let radiance = em.area_radiance(&world.geom, &h);
-                        let w = if st.specular {
-                            1.0
-                        } else {
-                            let d2 = (h.p - st.prev_p).length_squared();
-                            let cos_l = -h.ns.dot(ray.d);
-                            let light_pdf = world.select_pdf() * d2
-                                / (cos_l * world.geom.areas[shape as usize]);
-                            mis_power(st.prev_pdf, light_pdf)
-                        };
-                        st.l += st.thr * radiance * w;
-                    }
-                }
             }
-            let bsdf = &world.bsdfs[info.bsdf as usize];
-            if bsdf.is_null() {
-                // Index-matched boundary: continue straight on; a new segment starts.
-                st.medium = info.target_medium(h.n, ray.d, st.medium);
-                let o = offset_point(h.p, h.n, ray.d);
-                // The second hit of the query is the continued ray's first,
-                // if it lies ahead of the offset origin (else ask again).
-                st.known = match after {
-                    Known::Unknown => Known::Unknown,
-                    Known::Miss => Known::Miss,
-                    Known::Hit(h2) => {
-                        let h2 = world.geom.make_hit(&ray, h2);
-                        let t = (h2.p - o).dot(ray.d);
-                        if t > 0.0 {
-                            Known::Hit(Hit { t, ..h2 })
-                        } else {
-                            Known::Unknown
-                        }
-                    }
-                };
-                st.ray = Ray { o, d: ray.d };
-                continue;
-            }
-            // This interaction would be event number depth + 1: nothing it
-            // leads to can contribute unless depth + 1 < max_depth (tested
-            // before the BSDF is made concrete at the hit, which a path
-            // ending here does not need). A null-lobe sample may not count
-            // (see `path_scatter`), so its sample is drawn first and the
-            // test made after it.
-            let null_crossings = world.thin_is_crossing && bsdf.has_null_lobe();
-            if st.depth + 1 >= world.max_depth && !null_crossings {
-                return None;
-            }
-            let bsdf = world.bsdf_at(bsdf, &h);
-            let frame = world.frame_at(&bsdf, &h);
-            let wi_local = frame.to_local(-ray.d);
-            // Next-event estimation from the surface, in `path_scatter`.
-            let nee = bsdf.is_smooth() && st.depth + 1 < world.max_depth;
-            return Some(Stop::Surface(SurfaceStop {
-                h,
-                info,
-                bsdf,
-                frame,
-                wi_local,
-                null_crossings,
-                nee,
-            }));
+            Known::Unknown => unreachable!("`walk_all` finds every live path's next hit"),
         }
+        let info = world.shapes[h.shape as usize];
+        debug_assert!(info.emitter.is_none() && !info.null);
+        let bsdf = &world.bsdfs[info.bsdf as usize];
+        // This interaction would be event number depth + 1: nothing it
+        // leads to can contribute unless depth + 1 < max_depth (tested
+        // before the BSDF is made concrete at the hit, which a path
+        // ending here does not need). A null-lobe sample may not count
+        // (see `path_scatter`), so its sample is drawn first and the
+        // test made after it.
+        let null_crossings = world.thin_is_crossing && bsdf.has_null_lobe();
+        if st.depth + 1 >= world.max_depth && !null_crossings {
+            return None;
+        }
+        let bsdf = world.bsdf_at(bsdf, h);
+        let frame = world.frame_at(&bsdf, h);
+        let wi_local = frame.to_local(-st.ray.d);
+        // Next-event estimation from the surface, in `path_scatter`.
+        let nee = bsdf.is_smooth() && st.depth + 1 < world.max_depth;
+        Some(Stop::Surface(SurfaceStop {
+            info,
+            bsdf,
+            frame,
+            wi_local,
+            null_crossings,
+            nee,
+        }))
     }
 
     /// Add the radiance `radiance` of the environment, which the path
@@ -903,7 +866,7 @@ impl World {
         st.l += st.thr * radiance * w;
     }
 
-    /// Scatter the path at the surface interaction `stop`: next-event
+    /// Scatter the path at the surface interaction `stop` of its hit `h`: next-event
     /// estimation (with the light sample `light`, if it was drawn
     /// before), then the BSDF's sample and Russian roulette. `false` when
     /// the path ends here; then `st.l` is its radiance.
@@ -911,6 +874,7 @@ impl World {
     fn path_scatter(
         &self,
         st: &mut PathState,
+        h: &Hit,
         stop: &SurfaceStop<'_>,
         light: NeeLight,
         sample: Option<Option<BsdfSample>>,
@@ -918,7 +882,6 @@ impl World {
     ) -> bool {
         let world = self;
         let &SurfaceStop {
-            ref h,
             ref info,
             ref bsdf,
             ref frame,
