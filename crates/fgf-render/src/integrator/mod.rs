@@ -321,7 +321,7 @@ impl World {
             self.walk_all(&mut paths, &mut hits, live);
             for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
-                // (Written in place: a stop is some 300 bytes.)
+                // (Written in place: a stop is 256 bytes.)
                 stops[j] = self.path_advance(st, &hits[j]);
                 match &stops[j] {
                     None => {
@@ -491,14 +491,15 @@ impl World {
     }
 
     /// The nearest hits of the paths `live` whose next hit is not yet
-    /// known, all walked before any is made into a [`Hit`]: each walk
+    /// known, into `hits`, all walked before any is made into a [`Hit`]: each walk
     /// starts the load of what its hit reads first (the triangle's
     /// corners), and once all have walked, the loads of their vertices,
     /// normals and texture coordinates start together, so that these
     /// cache misses overlap with each other and
     /// with the walks instead of stalling each path in turn. (The same
-    /// hits as [`Self::path_advance`]'s own query, which scenes with
-    /// `null` boundaries need and which [`Self::li_beam`] does not serve.)
+    /// hits as [`Self::li_path`]'s queries; its queries of two hits, which
+    /// scenes with `null` boundaries need, [`Self::li_beam`] does not
+    /// serve.)
     #[inline(always)]
     fn walk_all(&self, paths: &mut [Option<PathState>; STEP], hits: &mut [Hit; STEP], live: u64) {
         let geom = &self.geom;
