@@ -628,26 +628,14 @@ fn slab_hit(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool 
     !(tn > tf * 1.000_000_4)
 }
 
-/// [`slab_hit`] for a ray whose `inv_d` is finite (a beam's, see
-/// [`Beam::new`]), where no product is NaN: the one-ray form of
-/// [`slab_hit_finite8`], which the tests hold it to.
-#[cfg(test)]
-fn slab_hit_finite(min: Vec3A, max: Vec3A, o: Vec3A, inv_d: Vec3A, t_max: f32) -> bool {
-    let t0 = (min - o) * inv_d;
-    let t1 = (max - o) * inv_d;
-    let tn = t0.min(t1).max_element();
-    let tf = t0.max(t1).min_element();
-    let tn = if tn > 0.0 { tn } else { 0.0 };
-    let tf = if tf < t_max { tf } else { t_max };
-    !(tn > tf * 1.000_000_4)
-}
-
 /// The slab test of eight rays whose inverse directions are finite (a
 /// beam's, see [`Beam::new`]: no product is NaN), origins `o`, inverse
 /// directions `inv_d` and limits `t_max` in lanes, against the box
-/// `[min, max]`: the mask of the lanes that may hit it, each by the
-/// operations of [`slab_hit`] clipped to `[0, t_max]` (so with the answer
-/// of the ray's own test, `slab_hit_finite` in the tests).
+/// `[min, max]`: the mask of the lanes that may hit it. Each lane gets
+/// the answer of the ray's own [`slab_hit`]: with finite inverses, the
+/// lesser of a slab's two distances is the one `slab_hit` takes as the
+/// entry, the greater its exit, and the clipping to `[0, t_max]` and the
+/// widened comparison are the same.
 #[inline(always)]
 pub(super) fn slab_hit_finite8(
     min: Vec3A,
@@ -855,7 +843,7 @@ mod tests {
                     (o[a][l], inv[a][l]) = (origin[a], i[a]);
                 }
                 lim[l] = t_max;
-                want |= u32::from(slab_hit_finite(min, max, origin, i, t_max)) << l;
+                want |= u32::from(slab_hit(min, max, origin, i, t_max)) << l;
             }
             let got = slab_hit_finite8(
                 min,
