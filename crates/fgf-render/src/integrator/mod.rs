@@ -97,30 +97,69 @@ struct PathState {
     eta: f32,
 }
 
-/// A surface interaction at which a path scatters, as
-/// [`World::path_advance`] finds it and [`World::path_scatter`] uses it
-/// (with the hit): its shape, its BSDF made concrete there, and its local
-/// frame.
-struct SurfaceStop<'w> {
-    info: ShapeInfo,
-    bsdf: HitBsdf<'w>,
-    frame: Frame,
+/// The surface interactions at which the paths of a round of
+/// [`World::li_beam`] scatter, lane `j` for path `j`: the shape hit, its
+/// BSDF made concrete there and its local frame, as
+/// [`World::path_advance`] finds them and the stages after it use them
+/// (with the hit). Each field is an array of its own, written in place: a
+/// whole interaction is some 250 bytes, which a value per path would build
+/// and then copy.
+struct Stops<'w> {
+    info: [ShapeInfo; STEP],
+    bsdf: [Option<HitBsdf<'w>>; STEP],
+    frame: [Frame; STEP],
     /// The direction toward the previous vertex, in `frame`.
-    wi_local: Vec3A,
-    /// A null-lobe sample here is a crossing, not a scattering event.
-    null_crossings: bool,
-    /// Next-event estimation is made here: its light sample comes first.
-    nee: bool,
+    wi_local: [Vec3A; STEP],
+    /// The lanes where a null-lobe sample is a crossing, not a scattering
+    /// event.
+    null_crossings: u64,
+    /// The lanes where next-event estimation is made: its light sample
+    /// comes first.
+    nee: u64,
 }
 
-/// Where [`World::path_advance`] leaves a path that goes on.
-// (Stops are written in place in fixed arrays and not moved; boxing the
-// large variant would allocate at every surface interaction.)
-#[allow(clippy::large_enum_variant)]
-enum Stop<'w> {
-    /// At a surface interaction, to scatter there.
-    Surface(SurfaceStop<'w>),
-    /// Escaped to the environment map (only for paths in step).
+impl<'w> Stops<'w> {
+    fn new() -> Self {
+        const NO_INFO: ShapeInfo = ShapeInfo {
+            bsdf: 0,
+            null: false,
+            partial: false,
+            emitter: None,
+            interior: None,
+            exterior: None,
+        };
+        const NO_FRAME: Frame = Frame {
+            s: Vec3A::X,
+            t: Vec3A::Y,
+            n: Vec3A::Z,
+        };
+        Stops {
+            info: [NO_INFO; STEP],
+            bsdf: std::array::from_fn(|_| None),
+            frame: [NO_FRAME; STEP],
+            wi_local: [Vec3A::ZERO; STEP],
+            null_crossings: 0,
+            nee: 0,
+        }
+    }
+
+    /// The BSDF at the surface interaction of lane `j`.
+    #[inline(always)]
+    fn bsdf(&self, j: usize) -> &Bsdf {
+        match &self.bsdf[j] {
+            Some(b) => b,
+            None => unreachable!("a path at a surface"),
+        }
+    }
+}
+
+/// Where [`World::path_advance`] leaves a path.
+enum Advance {
+    /// The path ends; its radiance is complete.
+    End,
+    /// At a surface interaction (in the round's [`Stops`]), to scatter there.
+    Surface,
+    /// Escaped to the environment map, whose radiance is yet to be added.
     Escaped,
 }
 
@@ -307,7 +346,7 @@ impl World {
         // Per round: each live path's next stop; the lanes (and variates)
         // of those whose next-event estimation needs a light sample, with the
         // samples drawn for them; the lanes of those that escaped.
-        let mut stops: [Option<Stop>; STEP] = std::array::from_fn(|_| None);
+        let mut stops = Stops::new();
         let mut need = [0usize; STEP];
         // The scene BSDF of each path at a surface.
         let mut bsdf_id = [0u32; STEP];
@@ -318,28 +357,27 @@ impl World {
         while live != 0 {
             // `surface`: the paths at a surface interaction this round.
             let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u64);
+            (stops.nee, stops.null_crossings) = (0, 0);
             self.walk_all(&mut paths, &mut hits, live);
             for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
-                // (Written in place: a stop is 256 bytes.)
-                stops[j] = self.path_advance(st, &hits[j]);
-                match &stops[j] {
-                    None => {
+                match self.path_advance(st, &hits[j], &mut stops, j) {
+                    Advance::End => {
                         out[j] = st.l;
                         paths[j] = None;
                         live &= !(1 << j);
                     }
-                    Some(Stop::Escaped) => {
+                    Advance::Escaped => {
                         for (c, d) in dirs.iter_mut().enumerate() {
                             d[n_escaped] = st.ray.d[c];
                         }
                         escaped[n_escaped] = j;
                         n_escaped += 1;
                     }
-                    Some(Stop::Surface(stop)) => {
+                    Advance::Surface => {
                         surface |= 1 << j;
-                        bsdf_id[j] = stop.info.bsdf;
-                        if stop.nee {
+                        bsdf_id[j] = stops.info[j].bsdf;
+                        if stops.nee >> j & 1 != 0 {
                             let (_, _, uj) = self.draw_emitter(&mut s[j]);
                             (u[0][n_need], u[1][n_need]) = (uj[0], uj[1]);
                             need[n_need] = j;
@@ -379,10 +417,6 @@ impl World {
                         (ok >> l & 1 == 1).then(|| LightSample::environment(at(d), at(v), p[l]));
                 }
             }
-            let stop_of = |j: usize| match &stops[j] {
-                Some(Stop::Surface(s)) => s,
-                _ => unreachable!("a path at a surface"),
-            };
             // The BSDFs' values toward the light samples, eight paths at a
             // time at the same scene BSDF where it has an 8-lane
             // evaluation (`evaluated`: the paths that have them).
@@ -394,12 +428,12 @@ impl World {
             }
             let (mut evaluated, mut tf, mut tp) = (0u64, [Spectrum::ZERO; STEP], [0f32; STEP]);
             groups8(todo, &bsdf_id, |lanes, n| {
-                let wi = lanes.map(|j| stop_of(j).wi_local);
+                let wi = lanes.map(|j| stops.wi_local[j]);
                 let wo = lanes.map(|j| match &light[j] {
-                    Some(ls) => stop_of(j).frame.to_local(ls.wi),
+                    Some(ls) => stops.frame[j].to_local(ls.wi),
                     None => unreachable!("a path with a light sample"),
                 });
-                let (f, pdf) = eval_pdf8(&lanes.map(|j| &*stop_of(j).bsdf)[..n], wi, wo);
+                let (f, pdf) = eval_pdf8(&lanes.map(|j| stops.bsdf(j))[..n], wi, wo);
                 for k in 0..n {
                     (tf[lanes[k]], tp[lanes[k]]) = (f[k], pdf[k]);
                     evaluated |= 1 << lanes[k];
@@ -427,8 +461,8 @@ impl World {
             let mut draw_alone = sampled;
             groups8(draw8, &bsdf_id, |lanes, n| {
                 let (wi, wo, ok, flipped) = sample_wo8_lanes(
-                    &stop_of(lanes[0]).bsdf,
-                    lanes.map(|j| stop_of(j).wi_local),
+                    stops.bsdf(lanes[0]),
+                    lanes.map(|j| stops.wi_local[j]),
                     lanes.map(|j| us[j].0),
                     lanes.map(|j| us[j].1),
                 );
@@ -441,8 +475,10 @@ impl World {
                 }
             });
             for j in lanes_of(draw_alone) {
-                let stop = stop_of(j);
-                if let Some(d) = stop.bsdf.sample_wo8(stop.wi_local, us[j].0, us[j].1) {
+                if let Some(d) = stops
+                    .bsdf(j)
+                    .sample_wo8(stops.wi_local[j], us[j].0, us[j].1)
+                {
                     sdir[j] = d;
                     todo |= 1 << j;
                 }
@@ -450,7 +486,7 @@ impl World {
             let mut alone = todo;
             groups8(todo, &bsdf_id, |lanes, n| {
                 let (f, pdf) = eval_pdf8(
-                    &lanes.map(|j| &*stop_of(j).bsdf)[..n],
+                    &lanes.map(|j| stops.bsdf(j))[..n],
                     lanes.map(|j| sdir[j].0),
                     lanes.map(|j| sdir[j].1),
                 );
@@ -466,22 +502,21 @@ impl World {
                 }
             });
             for j in lanes_of(alone) {
-                let stop = stop_of(j);
-                bs[j] = stop.bsdf.sample(stop.wi_local, us[j].0, us[j].1);
+                bs[j] = stops.bsdf(j).sample(stops.wi_local[j], us[j].0, us[j].1);
             }
             for j in lanes_of(surface) {
-                let (Some(Stop::Surface(stop)), Some(st)) = (&stops[j], &mut paths[j]) else {
+                let Some(st) = &mut paths[j] else {
                     continue;
                 };
                 let nee = match light[j] {
-                    _ if !stop.nee => NeeLight::Draw,
+                    _ if stops.nee >> j & 1 == 0 => NeeLight::Draw,
                     Some(ls) if evaluated >> j & 1 != 0 => {
                         NeeLight::Evaluated(ls, (tf[j] != Spectrum::ZERO).then_some((tf[j], tp[j])))
                     }
                     ls => NeeLight::Drawn(ls),
                 };
                 let sample = (sampled >> j & 1 != 0).then_some(bs[j]);
-                if !self.path_scatter(st, &hits[j], stop, nee, sample, &mut s[j]) {
+                if !self.path_scatter(st, &hits[j], (&stops, j), nee, sample, &mut s[j]) {
                     out[j] = st.l;
                     paths[j] = None;
                     live &= !(1 << j);
@@ -801,14 +836,21 @@ impl World {
     }
 
     /// Follow a path of [`Self::li_beam`] to its next scattering at a
-    /// surface, at its hit `h` if its `known` says there is one. `None`
-    /// when the path ends first; then `st.l` is its radiance. A path that
-    /// escapes to the environment map stops with [`Stop::Escaped`], before
-    /// its radiance is looked up. (The same steps as [`Self::li_path`]'s
+    /// surface, at its hit `h` if its `known` says there is one, and write
+    /// that interaction into lane `j` of `stops`. [`Advance::End`] when the
+    /// path ends first; then `st.l` is its radiance. A path that escapes
+    /// to the environment map stops with [`Advance::Escaped`], before its
+    /// radiance is looked up. (The same steps as [`Self::li_path`]'s
     /// in the scenes `li_beam` renders, which have no media, no `null`
     /// boundaries and no emitter but the environment map.)
     #[inline(always)]
-    fn path_advance<'w>(&'w self, st: &mut PathState, h: &Hit) -> Option<Stop<'w>> {
+    fn path_advance<'w>(
+        &'w self,
+        st: &mut PathState,
+        h: &Hit,
+        stops: &mut Stops<'w>,
+        j: usize,
+    ) -> Advance {
         // Invariant loads from the world are made here, at their use,
         // not hoisted out of `li_beam`'s loops: hoisted, they were spilled
         // to the stack (~90 instructions per sample).
@@ -820,9 +862,9 @@ impl World {
             Known::Miss => {
                 // Escaped: the environment, if any.
                 if world.env.is_some() && !(st.depth == 0 && world.hide_emitters) {
-                    return Some(Stop::Escaped);
+                    return Advance::Escaped;
                 }
-                return None;
+                return Advance::End;
             }
             Known::Unknown => unreachable!("`walk_all` finds every live path's next hit"),
         }
@@ -837,21 +879,18 @@ impl World {
         // test made after it.
         let null_crossings = world.thin_is_crossing && bsdf.has_null_lobe();
         if st.depth + 1 >= world.max_depth && !null_crossings {
-            return None;
+            return Advance::End;
         }
-        let bsdf = world.bsdf_at(bsdf, h);
-        let frame = world.frame_at(&bsdf, h);
-        let wi_local = frame.to_local(-st.ray.d);
+        let bsdf = stops.bsdf[j].insert(world.bsdf_at(bsdf, h));
+        let frame = world.frame_at(bsdf, h);
+        stops.wi_local[j] = frame.to_local(-st.ray.d);
+        stops.frame[j] = frame;
+        stops.info[j] = info;
         // Next-event estimation from the surface, in `path_scatter`.
         let nee = bsdf.is_smooth() && st.depth + 1 < world.max_depth;
-        Some(Stop::Surface(SurfaceStop {
-            info,
-            bsdf,
-            frame,
-            wi_local,
-            null_crossings,
-            nee,
-        }))
+        stops.nee |= u64::from(nee) << j;
+        stops.null_crossings |= u64::from(null_crossings) << j;
+        Advance::Surface
     }
 
     /// Add the radiance `radiance` of the environment, which the path
@@ -867,7 +906,7 @@ impl World {
         st.l += st.thr * radiance * w;
     }
 
-    /// Scatter the path at the surface interaction `stop` of its hit `h`: next-event
+    /// Scatter the path at its surface interaction, lane `j` of `stops`, at its hit `h`: next-event
     /// estimation (with the light sample `light`, if it was drawn
     /// before), then the BSDF's sample and Russian roulette. `false` when
     /// the path ends here; then `st.l` is its radiance.
@@ -876,22 +915,16 @@ impl World {
         &self,
         st: &mut PathState,
         h: &Hit,
-        stop: &SurfaceStop<'_>,
+        (stops, j): (&Stops<'_>, usize),
         light: NeeLight,
         sample: Option<Option<BsdfSample>>,
         s: &mut Sampler,
     ) -> bool {
         let world = self;
-        let &SurfaceStop {
-            ref info,
-            ref bsdf,
-            ref frame,
-            wi_local,
-            null_crossings,
-            nee,
-        } = stop;
-        let bsdf = &**bsdf;
-        if nee {
+        let (info, bsdf, frame) = (&stops.info[j], stops.bsdf(j), &stops.frame[j]);
+        let wi_local = stops.wi_local[j];
+        let null_crossings = stops.null_crossings >> j & 1 != 0;
+        if stops.nee >> j & 1 != 0 {
             let vertex = SurfaceVertex {
                 hit: h,
                 info,
