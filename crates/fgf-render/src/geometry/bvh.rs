@@ -326,10 +326,10 @@ impl Bvh {
         if count > 0 {
             return hit(start, count, t_max);
         }
-        let inv_d = d.recip();
-        if self.nodes.is_empty() || !slab_hit(self.min, self.max, o, inv_d, t_max) {
+        if self.nodes.is_empty() {
             return t_max;
         }
+        let inv_d = d.recip();
         if self.stack_need <= STACK {
             self.walk::<ORDERED>(&mut [(0, 0.0); STACK], o, inv_d, t_max, &mut hit)
         } else {
@@ -365,6 +365,14 @@ impl Bvh {
     ) -> f32 {
         let p = o * inv_d;
         if !p.is_finite() {
+            // (No root box test on the common path: a ray that misses the
+            // scene's bounds misses every child of the root too, and nearly
+            // every ray starts inside them. Here it keeps a ray with a
+            // non-finite origin, whose slabs the tests ignore, from
+            // visiting every leaf.)
+            if !slab_hit(self.min, self.max, o, inv_d, t_max) {
+                return t_max;
+            }
             return self.walk_unfused::<ORDERED>(stack, o, inv_d, t_max, hit);
         }
         let inv = [F8::splat(inv_d.x), F8::splat(inv_d.y), F8::splat(inv_d.z)];
