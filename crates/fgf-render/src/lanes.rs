@@ -618,11 +618,11 @@ mod portable {
         pub fn splat(x: i32) -> I8 {
             I8([x; 8])
         }
-        #[inline(always)]
+        #[cfg(test)]
         pub fn to_array(self) -> [i32; 8] {
             self.0
         }
-        #[inline(always)]
+        #[cfg(test)]
         pub fn from_array(a: [i32; 8]) -> I8 {
             I8(a)
         }
