@@ -365,11 +365,11 @@ impl Bvh {
     ) -> f32 {
         let p = o * inv_d;
         if !p.is_finite() {
-            // (No root box test on the common path: a ray that misses the
-            // scene's bounds misses every child of the root too, and nearly
-            // every ray starts inside them. Here it keeps a ray with a
-            // non-finite origin, whose slabs the tests ignore, from
-            // visiting every leaf.)
+            // (The scene's box is tested only here, as before, for rays
+            // with a zero direction component or a non-finite origin. On
+            // the common path the root node's test of its children culls
+            // a ray that misses the scene's bounds as well, and nearly
+            // every ray of a render starts inside them.)
             if !slab_hit(self.min, self.max, o, inv_d, t_max) {
                 return t_max;
             }
