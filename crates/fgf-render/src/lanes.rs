@@ -217,10 +217,6 @@ mod avx {
         pub fn and(self, b: M8) -> M8 {
             M8(unsafe { _mm256_and_ps(self.0, b.0) })
         }
-        #[inline(always)]
-        pub fn or(self, b: M8) -> M8 {
-            M8(unsafe { _mm256_or_ps(self.0, b.0) })
-        }
         /// Bit `i` set where lane `i` holds.
         #[inline(always)]
         pub fn bitmask(self) -> u32 {
@@ -231,10 +227,10 @@ mod avx {
         pub fn select(self, a: F8, b: F8) -> F8 {
             F8(unsafe { _mm256_blendv_ps(b.0, a.0, self.0) })
         }
-        /// 1 where the mask holds, else 0.
+        /// [`Self::select`] of integer lanes.
         #[inline(always)]
-        pub fn to_ones(self) -> I8 {
-            I8(unsafe { _mm256_srli_epi32::<31>(_mm256_castps_si256(self.0)) })
+        pub fn select_i8(self, a: I8, b: I8) -> I8 {
+            I8(unsafe { _mm256_blendv_epi8(b.0, a.0, _mm256_castps_si256(self.0)) })
         }
     }
 
@@ -258,11 +254,6 @@ mod avx {
         pub fn add(self, b: I8) -> I8 {
             I8(unsafe { _mm256_add_epi32(self.0, b.0) })
         }
-        /// Wrapping.
-        #[inline(always)]
-        pub fn sub(self, b: I8) -> I8 {
-            I8(unsafe { _mm256_sub_epi32(self.0, b.0) })
-        }
         /// Wrapping (the low 32 bits of the product).
         #[inline(always)]
         pub fn mul(self, b: I8) -> I8 {
@@ -275,10 +266,6 @@ mod avx {
         #[inline(always)]
         pub fn min(self, b: I8) -> I8 {
             I8(unsafe { _mm256_min_epi32(self.0, b.0) })
-        }
-        #[inline(always)]
-        pub fn gt(self, b: I8) -> M8 {
-            M8(unsafe { _mm256_castsi256_ps(_mm256_cmpgt_epi32(self.0, b.0)) })
         }
         /// Each lane as `f32` (rounded to nearest).
         #[inline(always)]
@@ -473,10 +460,6 @@ mod portable {
             M8([self.0[0] & b.0[0], self.0[1] & b.0[1]])
         }
         #[inline(always)]
-        pub fn or(self, b: M8) -> M8 {
-            M8([self.0[0] | b.0[0], self.0[1] | b.0[1]])
-        }
-        #[inline(always)]
         pub fn bitmask(self) -> u32 {
             self.0[0].bitmask() | self.0[1].bitmask() << 4
         }
@@ -499,8 +482,14 @@ mod portable {
             ])
         }
         #[inline(always)]
-        pub fn to_ones(self) -> I8 {
-            I8(std::array::from_fn(|l| self.lane(l) as i32))
+        pub fn select_i8(self, a: I8, b: I8) -> I8 {
+            I8(std::array::from_fn(|l| {
+                if self.lane(l) {
+                    a.0[l]
+                } else {
+                    b.0[l]
+                }
+            }))
         }
     }
 
@@ -635,10 +624,6 @@ mod portable {
             self.zip(b, i32::wrapping_add)
         }
         #[inline(always)]
-        pub fn sub(self, b: I8) -> I8 {
-            self.zip(b, i32::wrapping_sub)
-        }
-        #[inline(always)]
         pub fn mul(self, b: I8) -> I8 {
             self.zip(b, i32::wrapping_mul)
         }
@@ -649,10 +634,6 @@ mod portable {
         #[inline(always)]
         pub fn min(self, b: I8) -> I8 {
             self.zip(b, i32::min)
-        }
-        #[inline(always)]
-        pub fn gt(self, b: I8) -> M8 {
-            M8::from_fn(|l| self.0[l] > b.0[l])
         }
         #[inline(always)]
         pub fn to_f32(self) -> F8 {
@@ -818,8 +799,7 @@ mod tests {
             assert_eq!(fa.lt(fb).bitmask(), pa.lt(pb).bitmask());
             let (m, pm) = (fa.le(fb).and(fb.lt(fa)), pa.le(pb).and(pb.lt(pa)));
             assert_eq!(m.bitmask(), pm.bitmask());
-            let (m, pm) = (fa.lt(fb).or(fb.lt(fa)), pa.lt(pb).or(pb.lt(pa)));
-            assert_eq!(m.bitmask(), pm.bitmask());
+            let (m, pm) = (fa.lt(fb), pa.lt(pb));
             assert_eq!(
                 bits(m.select(fa, fb).to_array()),
                 bits(pm.select(pa, pb).to_array())
@@ -829,12 +809,13 @@ mod tests {
             assert_eq!(ia.to_array(), pia.to_array());
             let (ib, pib) = (fb.trunc(), pb.trunc());
             assert_eq!(ia.add(ib).to_array(), pia.add(pib).to_array());
-            assert_eq!(ia.sub(ib).to_array(), pia.sub(pib).to_array());
             assert_eq!(ia.mul(ib).to_array(), pia.mul(pib).to_array());
             assert_eq!(ia.max(ib).to_array(), pia.max(pib).to_array());
             assert_eq!(ia.min(ib).to_array(), pia.min(pib).to_array());
-            assert_eq!(ia.gt(ib).bitmask(), pia.gt(pib).bitmask());
-            assert_eq!(m.to_ones().to_array(), pm.to_ones().to_array());
+            assert_eq!(
+                m.select_i8(ia, ib).to_array(),
+                pm.select_i8(pia, pib).to_array()
+            );
             assert_eq!(bits(ia.to_f32().to_array()), bits(pia.to_f32().to_array()));
             let (g, pg) = (F8::gather(&table, ia), P::gather(&table, pia));
             assert_eq!(bits(g.to_array()), bits(pg.to_array()));
@@ -845,8 +826,8 @@ mod tests {
                 bits(pg.to_bits_f32().to_array())
             );
             assert_eq!(
-                I8::from_array(ia.to_array()).to_array(),
-                I8::splat(7).add(ia).sub(I8::splat(7)).to_array()
+                I8::from_array(ia.to_array()).add(I8::splat(7)).to_array(),
+                I8::splat(7).add(ia).to_array()
             );
             // Doubles, through their round trip to f32.
             let (da, db, pda, pdb) = (fa.to_f64(), fb.to_f64(), pa.to_f64(), pb.to_f64());

@@ -11,8 +11,9 @@
 //! * Sampling: piecewise constant over the grid's `W × (H - 1)` cells, each
 //!   weighted by the mean luminance of its corners times `sin θ` at its
 //!   centre (positive wherever the radiance is); a cell is chosen from the
-//!   marginal over rows and the conditional over columns, then a point
-//!   uniformly in it. The solid-angle pdf is `p_uv / (2π² sin θ)`.
+//!   marginal over rows and the conditional over columns, each by an alias
+//!   table (`docs/theory.md` §7.20), then a point uniformly in it. The
+//!   solid-angle pdf is `p_uv / (2π² sin θ)`.
 //! * [`Envmap::sample8`] draws eight samples at once with the 8-lane
 //!   vectors of `crate::lanes` (gathers from the same tables), each with
 //!   the bits of [`Envmap::sample`]: the paths that go on in step
@@ -35,85 +36,90 @@ pub struct Envmap {
     data: Vec<[f32; 4]>,
     to_world: Mat3,
     to_local: Mat3,
-    /// Cumulative row weights (`H` entries, the first 0), normalised to 1 at the end.
-    row_cdf: Vec<f32>,
-    /// Per row, the cumulative column weights (`W + 1` entries each), normalised.
-    col_cdf: Vec<f32>,
     /// Per cell, the pdf with respect to the unit square of `(u, v)`.
     cell_pdf: Vec<f32>,
-    /// Guide tables of `row_cdf` and of each row of `col_cdf` (see [`Guide`]).
-    row_guide: Guide,
-    /// The guide tables of the rows of `col_cdf`, one after another
-    /// (`W` bins each).
-    col_start: Vec<GuideBin>,
+    /// The alias table of the rows (`H - 1` bins), and those of the
+    /// columns of each row, one row after another (`W` bins each).
+    row_alias: Vec<AliasBin>,
+    col_alias: Vec<AliasBin>,
 }
 
-/// A guide table of a cumulative table (`n + 1` entries, the first 0, the
-/// last 1): for each of `n` equal bins of `u`, the interval [`pick`] returns
-/// at the bin's lower end. Inverting at `u` then starts there and walks the
-/// few intervals to the answer, instead of a binary search whose dependent
-/// loads dominate the cost of sampling the map; the answer is the same.
-/// Each bin also keeps the two table values around its start, so that
-/// the common case (the answer is that interval) reads one entry rather
-/// than the entry and then, dependent on it, the table: on a mesh scene
-/// lit by an environment map these two cache misses per row were most of
-/// the cost of sampling the map.
-#[derive(Debug, Clone)]
-struct Guide {
-    start: Vec<GuideBin>,
-}
+/// One bin of an alias table (Walker's method, built by Vose's): the bits
+/// of the probability of keeping the bin's own index, and the index given
+/// otherwise (one table of `u32` for the lanes' gathers). Choosing an
+/// index costs one read, where inverting a cumulative table walks it: on
+/// a mesh lit by an environment map those walks, their dependent reads and
+/// their mispredicted loop exits were some 4 % of the render
+/// (`docs/benchmarks.md`).
+type AliasBin = [u32; 2];
 
-/// One bin of a [`Guide`]: the interval `k` and the bits of `cdf[k]` and
-/// `cdf[k + 1]` (so that the lanes read the table as one table of `u32`).
-type GuideBin = [u32; 3];
-
-impl Guide {
-    fn new(cdf: &[f32]) -> Guide {
-        let n = cdf.len() - 1;
-        let start = (0..n)
-            .map(|g| {
-                let k = pick_interval(cdf, g as f32 / n as f32);
-                [k as u32, cdf[k].to_bits(), cdf[k + 1].to_bits()]
-            })
-            .collect();
-        Guide { start }
-    }
-
-    /// [`pick`] on `cdf`, the table this guide was made from.
-    #[inline(always)]
-    fn pick(&self, cdf: &[f32], u: f32) -> (usize, f32) {
-        guide_pick(&self.start, cdf, u)
-    }
-}
-
-/// [`Guide::pick`] with the guide's table `start` (`cdf.len() - 1` bins).
-#[inline(always)]
-fn guide_pick(start: &[GuideBin], cdf: &[f32], u: f32) -> (usize, f32) {
-    {
-        let n = cdf.len() - 1;
-        let g = bin_index(u * n as f32, n);
-        // The bin's start is exact for `u` at its lower end; rounding of
-        // `u · n` may put `u` just below it, hence the walk down as well.
-        let [k0, lo, hi] = start[g];
-        let (lo, hi) = (f32::from_bits(lo), f32::from_bits(hi));
-        let mut k = k0 as usize;
-        if k + 1 < n && hi <= u {
-            // Up: every step keeps cdf[k] <= u, so no walk down follows.
-            k += 1;
-            while k + 1 < n && cdf[k + 1] <= u {
-                k += 1;
-            }
-        } else if k > 0 && lo > u {
-            k -= 1;
-            while k > 0 && cdf[k] > u {
-                k -= 1;
-            }
-        } else {
-            return (k, within_interval(lo, hi, u));
+/// The alias table of `weights` (non-negative, not all zero): bin `k`
+/// keeps `k` with probability `prob[k]` and gives `alias[k]` otherwise, so
+/// that index `k` is chosen with probability `weights[k] / Σ weights`
+/// when the bin is chosen uniformly (`docs/theory.md` §7.20).
+fn alias_table(weights: &[f64]) -> Vec<AliasBin> {
+    let n = weights.len();
+    let total: f64 = weights.iter().sum();
+    // Each weight scaled so that the mean is 1.
+    let mut scaled: Vec<f64> = weights.iter().map(|w| w * n as f64 / total).collect();
+    let mut table: Vec<AliasBin> = (0..n).map(|k| [1f32.to_bits(), k as u32]).collect();
+    let (mut small, mut large): (Vec<usize>, Vec<usize>) = (0..n).partition(|&k| scaled[k] < 1.0);
+    while let (Some(&s), Some(&l)) = (small.last(), large.last()) {
+        small.pop();
+        table[s] = [(scaled[s] as f32).to_bits(), l as u32];
+        // The large bin gives the small one what it lacks.
+        scaled[l] -= 1.0 - scaled[s];
+        if scaled[l] < 1.0 {
+            large.pop();
+            small.push(l);
         }
-        (k, within(cdf, k, u))
     }
+    // What is left keeps its own index (1 up to rounding).
+    table
 }
+
+/// The index that the alias table `table` (`n` bins, lane `l` reading its
+/// bins from `table[2·base[l]..]`) gives for `u` in `[0, 1)`, and `u`'s
+/// position within that index's share, in `[0, 1)`: `u` chooses a bin,
+/// and what is left of it chooses between the bin's two indices and then
+/// the position. [`alias_pick`] is the scalar function, with the same bits.
+#[inline(always)]
+fn alias_pick8(table: &[u32], n: i32, base: I8, u: F8) -> (I8, F8) {
+    let x = u.mul(F8::splat(n as f32));
+    let k = bin_index8(x, n);
+    // (`x` may round up to `k + 1` in the last bin.)
+    let f = x.sub(k.to_f32()).min(F8::splat(ONE_BELOW));
+    let e = base.add(k).mul(I8::splat(2));
+    let p = I8::gather(table, e).to_bits_f32();
+    let alias = I8::gather(table, e.add(I8::splat(1)));
+    let own = f.lt(p);
+    let r = own.select(f.div(p), f.sub(p).div(F8::splat(1.0).sub(p)));
+    let r = r.max(F8::splat(0.0)).min(F8::splat(WITHIN_TOP));
+    (own.select_i8(k, alias), r)
+}
+
+/// [`alias_pick8`] of one variate, on the bins `table`.
+#[inline(always)]
+fn alias_pick(table: &[AliasBin], u: f32) -> (usize, f32) {
+    let n = table.len();
+    let x = u * n as f32;
+    let k = bin_index(x, n);
+    let f = (x - k as f32).min(ONE_BELOW);
+    let [p, alias] = table[k];
+    let p = f32::from_bits(p);
+    let (k, r) = if f < p {
+        (k, f / p)
+    } else {
+        (alias as usize, (f - p) / (1.0 - p))
+    };
+    (k, r.clamp(0.0, WITHIN_TOP))
+}
+
+/// The largest `f32` below 1.
+const ONE_BELOW: f32 = 1.0 - f32::EPSILON / 2.0;
+/// The largest position within a cell that a sample takes: off its far
+/// edge, which is the next cell's.
+const WITHIN_TOP: f32 = 0.999_999;
 
 /// A vertex radiance of the table.
 #[inline(always)]
@@ -153,44 +159,27 @@ impl Envmap {
             weight.iter_mut().for_each(|x| *x = 1.0);
         }
         let total: f64 = weight.iter().sum();
-        let mut row_cdf = vec![0f32; ny + 1];
-        let mut col_cdf = vec![0f32; ny * (nx + 1)];
-        let mut acc = 0f64;
-        for j in 0..ny {
-            let row: f64 = weight[j * nx..(j + 1) * nx].iter().sum();
-            let mut c = 0f64;
-            for i in 0..nx {
-                c += weight[j * nx + i];
-                col_cdf[j * (nx + 1) + i + 1] = if row > 0.0 {
-                    (c / row) as f32
-                } else {
-                    (i + 1) as f32 / nx as f32
-                };
-            }
-            col_cdf[j * (nx + 1) + nx] = 1.0;
-            acc += row;
-            row_cdf[j + 1] = (acc / total) as f32;
-        }
-        row_cdf[ny] = 1.0;
+        let rows: Vec<f64> = weight.chunks_exact(nx).map(|r| r.iter().sum()).collect();
+        let row_alias = alias_table(&rows);
+        // A row of zero weight is never chosen; its columns are uniform.
+        let uniform = vec![1.0; nx];
+        let col_alias = weight
+            .chunks_exact(nx)
+            .zip(&rows)
+            .flat_map(|(r, &sum)| alias_table(if sum > 0.0 { r } else { &uniform }))
+            .collect();
         let cells = (nx * ny) as f64;
         let cell_pdf = weight.iter().map(|x| (x / total * cells) as f32).collect();
         let l = Mat3::from_mat4(to_world);
-        let row_guide = Guide::new(&row_cdf);
-        let col_start = col_cdf
-            .chunks_exact(nx + 1)
-            .flat_map(|row| Guide::new(row).start)
-            .collect();
         Envmap {
             w,
             h,
             data,
             to_world: l,
             to_local: l.inverse(),
-            row_cdf,
-            col_cdf,
             cell_pdf,
-            row_guide,
-            col_start,
+            row_alias,
+            col_alias,
         }
     }
 
@@ -256,12 +245,8 @@ impl Envmap {
     /// A world direction toward the environment, its radiance and pdf.
     pub fn sample(&self, u: [f32; 2]) -> Option<(Vec3A, Spectrum, f32)> {
         let (nx, ny) = (self.w, self.h - 1);
-        let (j, fv) = self.row_guide.pick(&self.row_cdf, u[1]);
-        let (i, fu) = guide_pick(
-            &self.col_start[j * nx..(j + 1) * nx],
-            &self.col_cdf[j * (nx + 1)..(j + 1) * (nx + 1)],
-            u[0],
-        );
+        let (j, fv) = alias_pick(&self.row_alias, u[1]);
+        let (i, fu) = alias_pick(&self.col_alias[j * nx..(j + 1) * nx], u[0]);
         let gu = (i as f32 + fu) / nx as f32;
         let gv = (j as f32 + fv) / ny as f32;
         // θ = π·gv and φ = 2π·(gu + ½/W), as turns.
@@ -297,17 +282,8 @@ impl Envmap {
     #[inline(always)]
     pub(crate) fn sample8(&self, u0: F8, u1: F8) -> EnvSample8 {
         let (nx, ny) = (self.w as i32, self.h as i32 - 1);
-        let row_guide = self.row_guide.start.as_flattened();
-        let (j, fv) = guide_pick8(row_guide, &self.row_cdf, ny, I8::splat(0), I8::splat(0), u1);
-        let col_guide = self.col_start.as_flattened();
-        let (i, fu) = guide_pick8(
-            col_guide,
-            &self.col_cdf,
-            nx,
-            j.mul(I8::splat(nx)),
-            j.mul(I8::splat(nx + 1)),
-            u0,
-        );
+        let (j, fv) = alias_pick8(self.row_alias.as_flattened(), ny, I8::splat(0), u1);
+        let (i, fu) = alias_pick8(self.col_alias.as_flattened(), nx, j.mul(I8::splat(nx)), u0);
         let gu = i.to_f32().add(fu).div(F8::splat(nx as f32));
         let gv = j.to_f32().add(fv).div(F8::splat(ny as f32));
         // θ = π·gv and φ = 2π·(gu + ½/W), as turns.
@@ -408,82 +384,6 @@ fn bin_index8(x: F8, n: i32) -> I8 {
     x.trunc().max(I8::splat(0)).min(I8::splat(n - 1))
 }
 
-/// [`guide_pick`] of eight lanes, each with the scalar function's answer:
-/// lane `l` inverts the table of `n + 1` entries at `cdf[first[l]..]` with
-/// its guide's bins at `guide[3·base[l]..]` (one row of the envmap's
-/// conditional tables, or the marginal with `base = first = 0`).
-#[inline(always)]
-fn guide_pick8(guide: &[u32], cdf: &[f32], n: i32, base: I8, first: I8, u: F8) -> (I8, F8) {
-    let g = bin_index8(u.mul(F8::splat(n as f32)), n);
-    let e = base.add(g).mul(I8::splat(3));
-    let one = I8::splat(1);
-    let mut k = I8::gather(guide, e);
-    let mut lo = I8::gather(guide, e.add(one)).to_bits_f32();
-    let mut hi = I8::gather(guide, e.add(I8::splat(2))).to_bits_f32();
-    let (zero, last) = (I8::splat(0), I8::splat(n - 1));
-    let up = last.gt(k).and(hi.le(u));
-    let down = k.gt(zero).and(u.lt(lo));
-    let walk = up.or(down);
-    if walk.bitmask() != 0 {
-        // The lanes whose answer is not the bin's first interval walk to
-        // it in step, each as the scalar walk does.
-        k = k.add(up.to_ones()).sub(down.to_ones());
-        let (mut go_up, mut go_down) = (up, down);
-        loop {
-            let at = first.add(k);
-            go_up = go_up
-                .and(last.gt(k))
-                .and(F8::gather(cdf, at.add(one)).le(u));
-            go_down = go_down.and(k.gt(zero)).and(u.lt(F8::gather(cdf, at)));
-            if go_up.or(go_down).bitmask() == 0 {
-                break;
-            }
-            k = k.add(go_up.to_ones()).sub(go_down.to_ones());
-        }
-        let at = first.add(k);
-        lo = walk.select(F8::gather(cdf, at), lo);
-        hi = walk.select(F8::gather(cdf, at.add(one)), hi);
-    }
-    // `within_interval`.
-    let x = u.sub(lo).div(hi.sub(lo));
-    let x = x.lt(F8::splat(0.0)).select(F8::splat(0.0), x);
-    let top = F8::splat(0.999_999);
-    let x = top.lt(x).select(top, x);
-    (k, lo.lt(hi).select(x, F8::splat(0.5)))
-}
-
-/// Invert a cumulative table `cdf` (`cdf[0] = 0`, last = 1) at `u`: the
-/// interval and the position within it in [0, 1). (The reference for
-/// [`Guide::pick`], which gives the same answer faster.)
-#[cfg(test)]
-fn pick(cdf: &[f32], u: f32) -> (usize, f32) {
-    let k = pick_interval(cdf, u);
-    (k, within(cdf, k, u))
-}
-
-/// The interval of [`pick`]: the last `k < n` with `cdf[k] <= u` (0 if none).
-fn pick_interval(cdf: &[f32], u: f32) -> usize {
-    let n = cdf.len() - 1;
-    // First index with cdf[k] > u, minus one.
-    cdf.partition_point(|&c| c <= u).clamp(1, n) - 1
-}
-
-/// Where `u` lies within the interval `k` of `cdf`, in [0, 1).
-#[inline(always)]
-fn within(cdf: &[f32], k: usize, u: f32) -> f32 {
-    within_interval(cdf[k], cdf[k + 1], u)
-}
-
-/// Where `u` lies within the interval `[a, b)`, in [0, 1) (0.5 if empty).
-#[inline(always)]
-fn within_interval(a: f32, b: f32, u: f32) -> f32 {
-    if b > a {
-        ((u - a) / (b - a)).clamp(0.0, 0.999_999)
-    } else {
-        0.5
-    }
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -511,40 +411,46 @@ mod tests {
         )
     }
 
-    /// The guide tables invert the cumulative tables exactly as the binary
-    /// search does, on tables with empty intervals (zero-weight cells), a
-    /// dominant interval (a sun) and at the bins' edges.
+    /// An alias table gives each index its weight's share: exactly, up to
+    /// the rounding of the kept probabilities to `f32`, on weights with
+    /// zeros, a dominant one (a sun) and one bin; and choosing by
+    /// variates spread over `[0, 1)` hits each index in proportion, with
+    /// every position within its share in `[0, 1)`.
     #[test]
-    fn guide_pick_is_the_binary_search() {
-        let mut rng = Pcg64::seed_from_u64(11);
-        let weights: [&[f32]; 4] = [
+    fn alias_tables_give_each_index_its_weight() {
+        let weights: [&[f64]; 5] = [
             &[1.0; 7],
             &[0.0, 0.0, 3.0, 0.0, 1.0, 0.0, 0.0, 2.0, 0.0],
             &[
                 1e-6, 1e-6, 1e-6, 1.0, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6, 1e-6,
             ],
             &[5.0, 0.0],
+            &[2.5],
         ];
         for w in weights {
-            let total: f32 = w.iter().sum();
-            let mut cdf = vec![0.0];
-            let mut acc = 0.0;
-            for x in w {
-                acc += x;
-                cdf.push(acc / total);
+            let (n, total) = (w.len(), w.iter().sum::<f64>());
+            let table = alias_table(w);
+            let mut share = vec![0f64; n];
+            for (k, &[p, alias]) in table.iter().enumerate() {
+                let p = f32::from_bits(p) as f64;
+                assert!((0.0..=1.0).contains(&p), "{w:?}: bin {k} keeps {p}");
+                share[k] += p / n as f64;
+                share[alias as usize] += (1.0 - p) / n as f64;
             }
-            *cdf.last_mut().unwrap() = 1.0;
-            let guide = Guide::new(&cdf);
-            let n = w.len();
-            let mut us: Vec<f32> = (0..=n).map(|g| g as f32 / n as f32).collect();
-            us.extend(cdf.iter().flat_map(|&c| [c, c.next_down(), c.next_up()]));
-            us.extend((0..2000).map(|_| rng.random::<f32>()));
-            for u in us.into_iter().filter(|u| (0.0..1.0).contains(u)) {
-                let (a, b) = (guide.pick(&cdf, u), pick(&cdf, u));
-                assert!(
-                    a.0 == b.0 && a.1.to_bits() == b.1.to_bits(),
-                    "{w:?} u={u}: {a:?} vs {b:?}"
-                );
+            for k in 0..n {
+                assert!((share[k] - w[k] / total).abs() < 1e-6, "{w:?}: {share:?}");
+            }
+            // Variates on a fine grid: the fraction giving each index.
+            let m = 1 << 16;
+            let mut hits = vec![0usize; n];
+            for i in 0..m {
+                let (k, r) = alias_pick(&table, (i as f32 + 0.5) / m as f32);
+                assert!((0.0..1.0).contains(&r), "{w:?}: position {r}");
+                hits[k] += 1;
+            }
+            for k in 0..n {
+                let f = hits[k] as f64 / m as f64;
+                assert!((f - w[k] / total).abs() < 1e-3, "{w:?}: {hits:?}");
             }
         }
     }
