@@ -49,7 +49,7 @@ pub struct Envmap {
 /// otherwise (one table of `u32` for the lanes' gathers). Choosing an
 /// index costs one read, where inverting a cumulative table walks it: on
 /// a mesh lit by an environment map those walks, their dependent reads and
-/// their mispredicted loop exits were some 4 % of the render
+/// their mispredicted loop exits were 3–4 % of the render
 /// (`docs/benchmarks.md`).
 type AliasBin = [u32; 2];
 
