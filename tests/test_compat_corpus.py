@@ -56,24 +56,16 @@ SCENES: list[tuple[str, str | None]] = [
 # Mitsuba's 12 participating-media regression scenes, as they are: an
 # `envmap` lights them and a `checkerboard` covers the background.
 PM = f"{MD}/tests/scenes/participating_media"
-# fgf is above Mitsuba here by about 0.1 % in the channels with
-# sigma_t = 10 (red and blue), by a bias, not noise (K = 16 seeds show it
-# through the blocks of the medium). The bias is Mitsuba's: it spawns a ray
-# off a surface at an offset of 8.9e-5 (1 + max|p|) (fgf: 1.5e-5 (1 + max|p|)),
-# so each ray entering the null-bounded medium skips about that much of it,
-# an optical depth of order 2e-3 at sigma_t = 10. fgf rendering with
-# Mitsuba's offset agrees with Mitsuba; Mitsuba's image changes (-0.38 %)
-# when the whole scene is scaled by 0.1 with sigma_t by 10, which leaves the
-# exact image unchanged, and fgf's 4.5 times less
-# (test_dense_medium_scale_invariance below; docs/compatibility.md). So the
-# comparison with Mitsuba fails here for Mitsuba's offset: an expected
-# failure, strict, so that a change shows, and only an assertion counts as
-# the expected failure.
-SPECTRAL_XFAIL = pytest.mark.xfail(
-    strict=True,
-    raises=AssertionError,
-    reason="Mitsuba's ray offset thins the sigma_t = 10 medium: its image is ~0.1 % darker (docs/compatibility.md)",
-)
+# In `test_homo_spectral_sigmat_volpathmis` fgf is above Mitsuba by about
+# 0.1 % in the channels with sigma_t = 10 (red and blue), by a bias, not
+# noise: Mitsuba spawns a ray off a surface at an offset of 8.9e-5 (1 +
+# max|p|) (fgf: 1.5e-5 (1 + max|p|)), so each ray entering the null-bounded
+# medium skips about that much of it, an optical depth of order 2e-3 at
+# sigma_t = 10 (1,000 seeds show it, docs/compatibility.md). Here, at 16
+# seeds of 16 spp, that bias is about 0.4 of the comparison's standard
+# error: whether the comparison fails at given seeds is chance, and it is
+# compared like the other scenes. The bias itself is held by
+# test_dense_medium_scale_invariance below.
 SCENES += [
     (f"{PM}/{name}.xml", None)
     for name in (
@@ -111,10 +103,7 @@ def test_corpus_has_at_least_20_scenes_and_most_render() -> None:
     assert all((CORPUS / s).exists() for s, _ in SCENES)
 
 
-CASES = [
-    pytest.param(s, m, id=Path(s).stem, marks=[SPECTRAL_XFAIL] if s.endswith("test_homo_spectral_sigmat_volpathmis.xml") else [])
-    for s, m in SCENES
-]
+CASES = [pytest.param(s, m, id=Path(s).stem) for s, m in SCENES]
 
 
 @pytest.mark.parametrize("scene,missing", CASES)
