@@ -354,11 +354,23 @@ impl World {
         let mut light: [Option<LightSample>; STEP] = [None; STEP];
         let mut escaped = [0usize; STEP];
         let mut dirs = [[0f32; STEP]; 3];
+        // Per round, of the paths at a surface: their BSDFs' values and
+        // pdfs toward the light samples, their BSDF samples' variates and
+        // directions (with the local incident direction and whether the
+        // sample was flipped), and the samples. Each entry is written in the
+        // round that reads it (made here, not per round: their 5 KiB were
+        // zeroed every round).
+        let (mut tf, mut tp) = ([Spectrum::ZERO; STEP], [0f32; STEP]);
+        let mut us = [(0f32, [0f32; 2]); STEP];
+        let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); STEP];
+        let mut bs: [Option<BsdfSample>; STEP] = [None; STEP];
+        // The walks' records of the paths' next hits ([`Self::walk_all`]).
+        let mut rec: [Option<HitRecord>; STEP] = [None; STEP];
         while live != 0 {
             // `surface`: the paths at a surface interaction this round.
             let (mut n_need, mut n_escaped, mut surface) = (0, 0, 0u64);
             (stops.nee, stops.null_crossings) = (0, 0);
-            self.walk_all(&mut paths, &mut hits, live);
+            self.walk_all(&mut paths, &mut hits, &mut rec, live);
             for j in lanes_of(live) {
                 let Some(st) = &mut paths[j] else { continue };
                 match self.path_advance(st, &hits[j], &mut stops, j) {
@@ -426,7 +438,7 @@ impl World {
                     todo |= 1 << j;
                 }
             }
-            let (mut evaluated, mut tf, mut tp) = (0u64, [Spectrum::ZERO; STEP], [0f32; STEP]);
+            let mut evaluated = 0u64;
             groups8(todo, &bsdf_id, |lanes, n| {
                 let wi = lanes.map(|j| stops.wi_local[j]);
                 let wo = lanes.map(|j| match &light[j] {
@@ -447,13 +459,12 @@ impl World {
             // values there eight at a time (`sampled`: the paths whose
             // sample is made here; `todo`: those that have a direction).
             let (mut sampled, mut draw8, mut todo) = (0u64, 0u64, 0u64);
-            let mut bs: [Option<BsdfSample>; STEP] = [None; STEP];
-            let mut sdir = [(Vec3A::ZERO, Vec3A::ZERO, false); STEP];
-            let mut us = [(0f32, [0f32; 2]); STEP];
             for j in lanes_of(surface) {
                 if !self.bsdf_eval8[bsdf_id[j] as usize] {
                     continue;
                 }
+                // (No sample unless a direction is found below.)
+                bs[j] = None;
                 us[j] = (s[j].next_1d(), s[j].next_2d());
                 sampled |= 1 << j;
                 draw8 |= u64::from(self.bsdf_sample8[bsdf_id[j] as usize]) << j;
@@ -534,11 +545,17 @@ impl World {
     /// with the walks instead of stalling each path in turn. (The same
     /// hits as [`Self::li_path`]'s queries; its queries of two hits, which
     /// scenes with `null` boundaries need, [`Self::li_beam`] does not
-    /// serve.)
+    /// serve.) `rec` holds the walks' records; each lane walked is written
+    /// before it is read.
     #[inline(always)]
-    fn walk_all(&self, paths: &mut [Option<PathState>; STEP], hits: &mut [Hit; STEP], live: u64) {
+    fn walk_all(
+        &self,
+        paths: &mut [Option<PathState>; STEP],
+        hits: &mut [Hit; STEP],
+        rec: &mut [Option<HitRecord>; STEP],
+        live: u64,
+    ) {
         let geom = &self.geom;
-        let mut rec: [Option<HitRecord>; STEP] = [None; STEP];
         let mut walked = 0u64;
         for j in lanes_of(live) {
             let Some(st) = &paths[j] else { continue };

@@ -23,7 +23,7 @@
 //! exactly the same distance, both keep the least id, whatever order the
 //! leaves come in).
 
-use super::{slab_hit_finite8, slab_planes, Bvh, F8, PACK, STACK};
+use super::{fixed_stack, slab_hit_finite8, slab_planes, Bvh, Entry, F8, PACK, STACK};
 use crate::ray::Ray;
 use glam::Vec3A;
 
@@ -106,9 +106,14 @@ impl Bvh {
             return t_max;
         }
         if self.stack_need <= STACK {
-            self.walk_beam(&mut [(0, 0.0); STACK], beam, t_max, &mut hit)
+            self.walk_beam(&mut fixed_stack(), beam, t_max, &mut hit)
         } else {
-            self.walk_beam(&mut vec![(0, 0.0); self.stack_need], beam, t_max, &mut hit)
+            self.walk_beam(
+                &mut vec![Entry::uninit(); self.stack_need],
+                beam,
+                t_max,
+                &mut hit,
+            )
         }
     }
 
@@ -128,7 +133,7 @@ impl Bvh {
     #[inline(never)]
     fn walk_beam(
         &self,
-        stack: &mut [(u32, f32)],
+        stack: &mut [Entry],
         beam: &Beam,
         t_max: f32,
         hit: &mut impl FnMut(u32, u32, f32) -> f32,
