@@ -5,13 +5,17 @@
 //! end at `far_clip`.
 
 use crate::error::RenderError;
+use crate::lanes::F8;
+use crate::math::mul_normalize8;
 use crate::ray::Ray;
 use fgf_scene::{FovAxis, SensorDesc};
-use glam::{Affine3A, Vec3A};
+use glam::{Affine3A, Mat3, Vec3A};
 
 #[derive(Debug, Clone)]
 pub struct Camera {
     to_world: Affine3A,
+    /// The linear part of `to_world`, for [`Self::generate_rays8`].
+    linear: Mat3,
     /// tan of the half field of view along film x and y.
     tan_x: f32,
     tan_y: f32,
@@ -59,8 +63,10 @@ impl Camera {
         } else {
             (t * aspect, t)
         };
+        let to_world = Affine3A::from_mat4(s.to_world);
         Ok(Camera {
-            to_world: Affine3A::from_mat4(s.to_world),
+            to_world,
+            linear: Mat3::from(to_world.matrix3),
             tan_x,
             tan_y,
             pp: [
@@ -97,6 +103,39 @@ impl Camera {
             },
             (self.far - self.near) * len,
         )
+    }
+
+    /// [`Self::generate_ray`] of eight film positions (lanes of `fx`,
+    /// `fy`): the rays' origins and directions (x, y, z) and their limits,
+    /// each lane with the bits of the scalar function's ray, by the same
+    /// operations in the same order. Eight at a time, a ray's divisions
+    /// and square roots cost an eighth of an instruction each.
+    #[inline(always)]
+    pub(crate) fn generate_rays8(&self, fx: F8, fy: F8) -> ([F8; 3], [F8; 3], F8) {
+        let film = |f: F8, a: usize| {
+            let two = F8::splat(2.0);
+            two.mul(f.add(F8::splat(self.pp[a])))
+                .div(F8::splat(self.size[a]))
+                .sub(F8::splat(1.0))
+        };
+        let (nx, ny) = (film(fx, 0), film(fy, 1));
+        let one = F8::splat(1.0);
+        let local = [
+            nx.neg().mul(F8::splat(self.tan_x)),
+            ny.neg().mul(F8::splat(self.tan_y)),
+            one,
+        ];
+        // |local|, as glam sums the squares: (x² + y²) + z².
+        let len = local[0]
+            .mul(local[0])
+            .add(local[1].mul(local[1]))
+            .add(one.mul(one))
+            .sqrt();
+        let d = mul_normalize8(self.linear, local);
+        let t_near = F8::splat(self.near).mul(len);
+        let t = self.to_world.translation;
+        let o = [0, 1, 2].map(|c| F8::splat(t[c]).add(d[c].mul(t_near)));
+        (o, d, F8::splat(self.far - self.near).mul(len))
     }
 }
 
@@ -159,5 +198,41 @@ mod tests {
         let c = Camera::new(&sensor(FovAxis::Smaller, 200, 100)).unwrap();
         let (r2, _) = c.generate_ray(100.0, 0.0);
         assert!((r.d - r2.d).length() < 1e-6);
+    }
+
+    /// Each lane of [`Camera::generate_rays8`] has the bits of the scalar
+    /// ray, for a rotated and offset camera with a principal point, over
+    /// the film, its edges and past them.
+    #[test]
+    fn rays8_are_generate_ray() {
+        use rand::{Rng, SeedableRng};
+        let mut s = sensor(FovAxis::Y, 317, 123);
+        s.to_world = Mat4::look_at_rh(
+            glam::Vec3::new(0.3, 2.0, 4.6),
+            glam::Vec3::new(-0.2, 0.5, 0.1),
+            glam::Vec3::Y,
+        )
+        .inverse();
+        s.principal_point = [0.013, -0.021];
+        s.fov = 37.5;
+        let c = Camera::new(&s).unwrap();
+        let mut rng = rand_pcg::Pcg64::seed_from_u64(5);
+        let bits = |v: Vec3A| v.to_array().map(f32::to_bits);
+        for round in 0..5_000 {
+            let mut fx: [f32; 8] = std::array::from_fn(|_| rng.random::<f32>() * 340.0 - 10.0);
+            let mut fy: [f32; 8] = std::array::from_fn(|_| rng.random::<f32>() * 140.0 - 10.0);
+            if round == 0 {
+                (fx[0], fy[0], fx[1], fy[1]) = (0.0, 0.0, 317.0f32.next_down(), 123.0);
+            }
+            let (o, d, t) = c.generate_rays8(F8::from_array(fx), F8::from_array(fy));
+            let (o, d, t) = (o.map(F8::to_array), d.map(F8::to_array), t.to_array());
+            for l in 0..8 {
+                let (r, t_max) = c.generate_ray(fx[l], fy[l]);
+                let lane = |a: [[f32; 8]; 3]| Vec3A::new(a[0][l], a[1][l], a[2][l]);
+                assert_eq!(bits(lane(o)), bits(r.o), "({}, {})", fx[l], fy[l]);
+                assert_eq!(bits(lane(d)), bits(r.d), "({}, {})", fx[l], fy[l]);
+                assert_eq!(t[l].to_bits(), t_max.to_bits());
+            }
+        }
     }
 }

@@ -6,7 +6,7 @@
 
 use crate::lanes::{D8, F8};
 use fgf_core::rng::{mix64, stream_key, SECOND_WORD};
-use glam::Vec3A;
+use glam::{Mat3, Vec3A};
 use rand::RngCore;
 use rand_pcg::Pcg32;
 use std::f32::consts::PI;
@@ -469,6 +469,24 @@ pub(crate) fn acos8(x: F8) -> F8 {
         .select(D8::splat(PI).sub(a_big), a_big);
     let a_small = D8::splat(FRAC_PI_2).sub(asin_s.copysign(xd));
     big.select(a_big, a_small).to_f32()
+}
+
+/// `(m · v).normalize()` of eight vectors `v` (x, y, z), as glam computes
+/// it for a `Vec3A`: the columns of `m` scaled and summed in order, then
+/// divided by the square root of `(x² + y²) + z²`.
+#[inline(always)]
+pub(crate) fn mul_normalize8(m: Mat3, v: [F8; 3]) -> [F8; 3] {
+    let m = m.to_cols_array_2d();
+    let w: [F8; 3] = std::array::from_fn(|r| {
+        let c = |k: usize| F8::splat(m[k][r]).mul(v[k]);
+        c(0).add(c(1)).add(c(2))
+    });
+    let len = w[0]
+        .mul(w[0])
+        .add(w[1].mul(w[1]))
+        .add(w[2].mul(w[2]))
+        .sqrt();
+    w.map(|x| x.div(len))
 }
 
 #[cfg(test)]

@@ -31,6 +31,7 @@ use crate::film::{
 use crate::geometry::bvh::BEAM;
 use crate::geometry::Hit;
 use crate::integrator::STEP;
+use crate::lanes::F8;
 use crate::math::Sampler;
 use crate::ray::Ray;
 use crate::spectrum::Spectrum;
@@ -357,9 +358,10 @@ impl Prepared {
     /// (whole runs of up to `BEAM` samples of a pixel), then traced
     /// (`Prepared::trace_batch`) and added to their pixels in the batch's
     /// order: each pixel's in the order of `k`. A sample's start (its
-    /// stream's keys, the ray and its normalisation) is a chain of
-    /// dependent multiplies, divisions and square roots; made together,
-    /// the chains overlap. `Err((x, (channel, value)))` if a sum of pixel
+    /// stream's keys and film position) is a chain of dependent
+    /// multiplies; made together, the chains overlap; the rays, with their
+    /// divisions and square roots, are then made eight at a time
+    /// (`Prepared::camera_rays`). `Err((x, (channel, value)))` if a sum of pixel
     /// `x` leaves the fixed-point range.
     #[allow(clippy::type_complexity)]
     fn render_segment(
@@ -395,7 +397,7 @@ impl Prepared {
                 }
                 for j in 0..m {
                     let b = batch.len;
-                    (batch.s[b], batch.rays[b], batch.t_max[b], batch.weight[b]) =
+                    (batch.s[b], batch.film[b], batch.weight[b]) =
                         self.camera_sample(pixel_key, x0 + x, y, k + j as u32);
                     batch.x[b] = x;
                     batch.len += 1;
@@ -412,7 +414,8 @@ impl Prepared {
 
 impl Prepared {
     /// Sample `k` of pixel `(x, y)` (whose key is `pixel_key`): its random
-    /// stream, camera ray, the ray's limit and the filter weight.
+    /// stream, film position and filter weight. (Its camera ray is made
+    /// with seven others', [`Prepared::camera_rays`].)
     #[inline(always)]
     fn camera_sample(
         &self,
@@ -420,24 +423,45 @@ impl Prepared {
         x: usize,
         y: usize,
         k: u32,
-    ) -> (Sampler, Ray, f32, f32) {
+    ) -> (Sampler, [f32; 2], f32) {
         let mut s = Sampler::for_sample(pixel_key, k as u64);
         let (w, h) = (self.width as u32, self.height as u32);
         let (fx, fy, weight) = self
             .filter
             .sample_position(x as u32, y as u32, w, h, &mut s);
-        let (ray, t_max) = self.world.camera.generate_ray(fx, fy);
-        (s, ray, t_max, weight)
+        (s, [fx, fy], weight)
+    }
+
+    /// The camera rays of the samples of `batch` and their limits, from
+    /// their film positions, eight at a time: each the ray
+    /// [`crate::camera::Camera::generate_ray`] gives.
+    #[inline(always)]
+    fn camera_rays(&self, batch: &mut Batch) {
+        for c in (0..batch.len).step_by(8) {
+            let n = (batch.len - c).min(8);
+            // (Lanes past the batch's end repeat the chunk's positions.)
+            let at = |a: usize| F8::from_array(std::array::from_fn(|l| batch.film[c + l % n][a]));
+            let (o, d, t_max) = self.world.camera.generate_rays8(at(0), at(1));
+            let (o, d, t_max) = (o.map(F8::to_array), d.map(F8::to_array), t_max.to_array());
+            for l in 0..n {
+                batch.rays[c + l] = Ray {
+                    o: Vec3A::new(o[0][l], o[1][l], o[2][l]),
+                    d: Vec3A::new(d[0][l], d[1][l], d[2][l]),
+                };
+                batch.t_max[c + l] = t_max[l];
+            }
+        }
     }
 }
 
 /// Camera samples waiting to be traced: pixel `x[j]` of a row, its random
-/// stream, camera ray, the ray's limit and filter weight, for `j < len`;
+/// stream, film position, camera ray, the ray's limit and filter weight, for `j < len`;
 /// and, once traced, their first hits (with beams) and radiance `l`.
 struct Batch {
     len: usize,
     x: [usize; STEP],
     s: [Sampler; STEP],
+    film: [[f32; 2]; STEP],
     rays: [Ray; STEP],
     t_max: [f32; STEP],
     weight: [f32; STEP],
@@ -451,6 +475,7 @@ impl Batch {
             len: 0,
             x: [0; STEP],
             s: std::array::from_fn(|_| Sampler::idle()),
+            film: [[0.0; 2]; STEP],
             rays: [Ray {
                 o: Vec3A::ZERO,
                 d: Vec3A::Z,
@@ -472,6 +497,7 @@ impl Prepared {
     /// value is the one [`World::li`] gives it.
     #[inline(never)]
     fn trace_batch(&self, batch: &mut Batch, env: Option<&Envmap>, beams: bool) {
+        self.camera_rays(batch);
         let m = batch.len;
         let b = batch;
         if beams {

@@ -20,7 +20,7 @@
 //!   (`World::li_beam`) draw their light samples so.
 
 use crate::lanes::{F8, I8, M8};
-use crate::math::{self, bin_index};
+use crate::math::{self, bin_index, mul_normalize8};
 use crate::spectrum::Spectrum;
 use fgf_scene::RgbImage;
 use glam::{Mat3, Mat4, Vec3A};
@@ -358,24 +358,6 @@ impl Envmap {
             a.mul(gy).add(b.mul(fy))
         })
     }
-}
-
-/// `(m · v).normalize()` of eight vectors `v` (x, y, z), as glam computes
-/// it for a `Vec3A`: the columns of `m` scaled and summed in order, then
-/// divided by the square root of `(x² + y²) + z²`.
-#[inline(always)]
-fn mul_normalize8(m: Mat3, v: [F8; 3]) -> [F8; 3] {
-    let m = m.to_cols_array_2d();
-    let w: [F8; 3] = std::array::from_fn(|r| {
-        let c = |k: usize| F8::splat(m[k][r]).mul(v[k]);
-        c(0).add(c(1)).add(c(2))
-    });
-    let len = w[0]
-        .mul(w[0])
-        .add(w[1].mul(w[1]))
-        .add(w[2].mul(w[2]))
-        .sqrt();
-    w.map(|x| x.div(len))
 }
 
 /// [`bin_index`] of eight lanes, for `x < 2³¹` (NaN and negative lanes give 0).
