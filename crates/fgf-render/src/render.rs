@@ -437,10 +437,12 @@ impl Prepared {
     /// [`crate::camera::Camera::generate_ray`] gives.
     #[inline(always)]
     fn camera_rays(&self, batch: &mut Batch) {
+        // (Lanes past the batch's end read positions of earlier batches, or
+        // zeros: finite, and their rays are not used.)
+        const _: () = assert!(STEP % 8 == 0);
         for c in (0..batch.len).step_by(8) {
             let n = (batch.len - c).min(8);
-            // (Lanes past the batch's end repeat the chunk's positions.)
-            let at = |a: usize| F8::from_array(std::array::from_fn(|l| batch.film[c + l % n][a]));
+            let at = |a: usize| F8::from_array(std::array::from_fn(|l| batch.film[c + l][a]));
             let (o, d, t_max) = self.world.camera.generate_rays8(at(0), at(1));
             let (o, d, t_max) = (o.map(F8::to_array), d.map(F8::to_array), t_max.to_array());
             for l in 0..n {
