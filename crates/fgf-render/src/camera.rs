@@ -14,8 +14,6 @@ use glam::{Affine3A, Mat3, Vec3A};
 #[derive(Debug, Clone)]
 pub struct Camera {
     to_world: Affine3A,
-    /// The linear part of `to_world`, for [`Self::generate_rays8`].
-    linear: Mat3,
     /// tan of the half field of view along film x and y.
     tan_x: f32,
     tan_y: f32,
@@ -63,10 +61,8 @@ impl Camera {
         } else {
             (t * aspect, t)
         };
-        let to_world = Affine3A::from_mat4(s.to_world);
         Ok(Camera {
-            to_world,
-            linear: Mat3::from(to_world.matrix3),
+            to_world: Affine3A::from_mat4(s.to_world),
             tan_x,
             tan_y,
             pp: [
@@ -131,7 +127,7 @@ impl Camera {
             .add(local[1].mul(local[1]))
             .add(one.mul(one))
             .sqrt();
-        let d = mul_normalize8(self.linear, local);
+        let d = mul_normalize8(Mat3::from(self.to_world.matrix3), local);
         let t_near = F8::splat(self.near).mul(len);
         let t = self.to_world.translation;
         let o = [0, 1, 2].map(|c| F8::splat(t[c]).add(d[c].mul(t_near)));
