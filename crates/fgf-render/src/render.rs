@@ -30,7 +30,7 @@ use crate::film::{
 };
 use crate::geometry::bvh::BEAM;
 use crate::geometry::Hit;
-use crate::integrator::STEP;
+use crate::integrator::{lanes8, STEP};
 use crate::lanes::F8;
 use crate::math::Sampler;
 use crate::ray::Ray;
@@ -397,8 +397,10 @@ impl Prepared {
                 }
                 for j in 0..m {
                     let b = batch.len;
-                    (batch.s[b], batch.film[b], batch.weight[b]) =
+                    let (s, [fx, fy], weight) =
                         self.camera_sample(pixel_key, x0 + x, y, k + j as u32);
+                    (batch.s[b], batch.weight[b]) = (s, weight);
+                    (batch.film[0][b], batch.film[1][b]) = (fx, fy);
                     batch.x[b] = x;
                     batch.len += 1;
                 }
@@ -437,13 +439,15 @@ impl Prepared {
     /// [`crate::camera::Camera::generate_ray`] gives.
     #[inline(always)]
     fn camera_rays(&self, batch: &mut Batch) {
-        // (Lanes past the batch's end read positions of earlier batches, or
-        // zeros: finite, and their rays are not used.)
-        const _: () = assert!(STEP % 8 == 0);
+        // (Lanes past the batch's end read other positions of the arrays:
+        // finite, and their rays are not used.)
         for c in (0..batch.len).step_by(8) {
             let n = (batch.len - c).min(8);
-            let at = |a: usize| F8::from_array(std::array::from_fn(|l| batch.film[c + l][a]));
-            let (o, d, t_max) = self.world.camera.generate_rays8(at(0), at(1));
+            let [fx, fy] = &batch.film;
+            let (o, d, t_max) = self
+                .world
+                .camera
+                .generate_rays8(lanes8(fx, c), lanes8(fy, c));
             let (o, d, t_max) = (o.map(F8::to_array), d.map(F8::to_array), t_max.to_array());
             for l in 0..n {
                 batch.rays[c + l] = Ray {
@@ -463,7 +467,8 @@ struct Batch {
     len: usize,
     x: [usize; STEP],
     s: [Sampler; STEP],
-    film: [[f32; 2]; STEP],
+    /// Film positions, x and y.
+    film: [[f32; STEP]; 2],
     rays: [Ray; STEP],
     t_max: [f32; STEP],
     weight: [f32; STEP],
@@ -477,7 +482,7 @@ impl Batch {
             len: 0,
             x: [0; STEP],
             s: std::array::from_fn(|_| Sampler::idle()),
-            film: [[0.0; 2]; STEP],
+            film: [[0.0; STEP]; 2],
             rays: [Ray {
                 o: Vec3A::ZERO,
                 d: Vec3A::Z,

@@ -216,7 +216,7 @@ fn lanes_of(mut mask: u64) -> impl Iterator<Item = usize> {
 
 /// Lanes `c..c + 8` of `a` (wrapped around), as eight lanes.
 #[inline(always)]
-fn lanes8(a: &[f32; STEP], c: usize) -> F8 {
+pub(crate) fn lanes8(a: &[f32; STEP], c: usize) -> F8 {
     F8::from_array(std::array::from_fn(|l| a[(c + l) % STEP]))
 }
 
