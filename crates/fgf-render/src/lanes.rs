@@ -137,6 +137,18 @@ mod avx {
         pub fn max(self, b: F8) -> F8 {
             F8(unsafe { _mm256_max_ps(self.0, b.0) })
         }
+        /// The least lane (of lanes without NaN).
+        #[inline(always)]
+        pub fn hmin(self) -> f32 {
+            unsafe {
+                let m = _mm_min_ps(
+                    _mm256_castps256_ps128(self.0),
+                    _mm256_extractf128_ps::<1>(self.0),
+                );
+                let m = _mm_min_ps(m, _mm_movehl_ps(m, m));
+                _mm_cvtss_f32(_mm_min_ss(m, _mm_shuffle_ps::<1>(m, m)))
+            }
+        }
         #[inline(always)]
         pub fn add(self, b: F8) -> F8 {
             F8(unsafe { _mm256_add_ps(self.0, b.0) })
@@ -542,6 +554,11 @@ mod portable {
             let m = |x: Vec4, y: Vec4| Vec4::select(x.cmpgt(y), x, y);
             F8([m(self.0[0], b.0[0]), m(self.0[1], b.0[1])])
         }
+        /// The least lane (of lanes without NaN).
+        #[inline(always)]
+        pub fn hmin(self) -> f32 {
+            self.min(F8([self.0[1], self.0[0]])).0[0].min_element()
+        }
         #[inline(always)]
         pub fn add(self, b: F8) -> F8 {
             F8([self.0[0] + b.0[0], self.0[1] + b.0[1]])
@@ -794,6 +811,11 @@ mod tests {
             assert_eq!(bits(fa.add(fb).to_array()), bits(pa.add(pb).to_array()));
             assert_eq!(bits(fa.div(fb).to_array()), bits(pa.div(pb).to_array()));
             assert_eq!(bits(fa.sqrt().to_array()), bits(pa.sqrt().to_array()));
+            if !a.iter().any(|x| x.is_nan()) {
+                // (The least lane as a value: of 0 and -0 either may come.)
+                let least = a.iter().copied().fold(f32::INFINITY, f32::min);
+                assert!(fa.hmin() == least && pa.hmin() == least, "{a:?}");
+            }
             assert_eq!(fa.le(fb).bitmask(), pa.le(pb).bitmask());
             assert_eq!(fa.sign_mask().bitmask(), pa.sign_mask().bitmask());
             assert_eq!(fa.lt(fb).bitmask(), pa.lt(pb).bitmask());

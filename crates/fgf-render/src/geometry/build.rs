@@ -365,8 +365,10 @@ impl Builder {
         crate::huge::advise(&self.positions);
         crate::huge::advise(&self.normals);
         crate::huge::advise(&self.uvs);
+        let lone_pack = bvh.root_leaf().1 > 0 && pack_other.is_empty();
         Geometry {
             small: self.tris.len() <= Geometry::SMALL,
+            lone_pack,
             tris: self.tris,
             corners: self.corners,
             positions: self.positions,

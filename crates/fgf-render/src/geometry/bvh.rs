@@ -323,6 +323,12 @@ impl Bvh {
         self.stack_need
     }
 
+    /// The range of primitives of a root that is a leaf (`count == 0`:
+    /// the root is a node, or there is nothing).
+    pub(super) fn root_leaf(&self) -> (u32, u32) {
+        self.root_leaf
+    }
+
     /// Bounds of the whole scene (empty if there is nothing).
     pub fn bounds(&self) -> Aabb {
         Aabb {

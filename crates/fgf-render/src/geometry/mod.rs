@@ -54,6 +54,9 @@ pub struct Geometry {
     /// records, which then stay in cache, rather than compute from the
     /// corners what the records hold (some 40 instructions per hit).
     small: bool,
+    /// The whole scene is one pack of triangles and parallelograms (the
+    /// root is a leaf, without spheres or disks): queries test it alone.
+    lone_pack: bool,
     /// The vertices of all meshes, world space (12-byte `Vec3`s), and
     /// where a mesh has them, their normals and texture coordinates (same
     /// indices; zero for the vertices of meshes without, and empty while

@@ -4,7 +4,7 @@
 
 use super::bvh::PACK;
 use super::types::{Tri, INDEX_MASK, KIND_SHIFT, KIND_TRI, PAD};
-use crate::lanes::F8;
+use crate::lanes::{F8, M8};
 use crate::ray::Ray;
 
 /// Eight triangles in structure-of-arrays form, intersected at once with
@@ -91,6 +91,85 @@ impl TriPack {
         d: [F8; 3],
         t_max: f32,
     ) -> (u32, F8, F8, F8) {
+        let (ok, t, u, v) = self.test::<TIES>(o, d, t_max);
+        (ok.bitmask(), t, u, v)
+    }
+
+    /// The two nearest of [`Self::hits`] (without ties), nearer first, as
+    /// `(lane, t, u, v)`; of hits at the same distance, the lesser lane
+    /// first. This is what [`Self::hits`] gives a query that keeps the two
+    /// nearest hits it is shown in lane order, found here without a
+    /// branch per hit (the lone pack of a scene of a few primitives).
+    #[inline(always)]
+    pub(super) fn two_nearest(
+        &self,
+        o: [F8; 3],
+        d: [F8; 3],
+        t_max: f32,
+    ) -> [Option<(usize, f32, f32, f32)>; 2] {
+        let (ok, t, u, v) = self.test::<false>(o, d, t_max);
+        // Lanes not hit at +∞; a hit's t is below t_max, so finite.
+        let inf = F8::splat(f32::INFINITY);
+        let t = ok.select(t, inf);
+        let t0 = t.hmin();
+        if t0 == f32::INFINITY {
+            return [None, None];
+        }
+        let (u, v) = (u.to_array(), v.to_array());
+        let at = |l: u32, t: f32| {
+            let l = l as usize;
+            (l, t, u[l], v[l])
+        };
+        let nearest = t.le(F8::splat(t0));
+        let lanes0 = nearest.bitmask();
+        let first = at(lanes0.trailing_zeros(), t0);
+        let rest = lanes0 & (lanes0 - 1);
+        if rest != 0 {
+            return [Some(first), Some(at(rest.trailing_zeros(), t0))];
+        }
+        let t = nearest.select(inf, t);
+        let t1 = t.hmin();
+        if t1 == f32::INFINITY {
+            return [Some(first), None];
+        }
+        let l1 = t.le(F8::splat(t1)).bitmask().trailing_zeros();
+        [Some(first), Some(at(l1, t1))]
+    }
+
+    /// The nearest of [`Self::hits`] (without ties) as `(lane, t, u, v)`;
+    /// of hits at the same distance, that of the least primitive id in
+    /// `prims` (the pack's references, by lane), as the walk's nearest-hit
+    /// query chooses.
+    #[inline(always)]
+    pub(super) fn nearest(
+        &self,
+        o: [F8; 3],
+        d: [F8; 3],
+        t_max: f32,
+        prims: &[u32],
+    ) -> Option<(usize, f32, f32, f32)> {
+        let (ok, t, u, v) = self.test::<false>(o, d, t_max);
+        let t = ok.select(t, F8::splat(f32::INFINITY));
+        let t0 = t.hmin();
+        if t0 == f32::INFINITY {
+            return None;
+        }
+        let mut lanes = t.le(F8::splat(t0)).bitmask();
+        let mut best = lanes.trailing_zeros() as usize;
+        lanes &= lanes - 1;
+        while lanes != 0 {
+            let l = lanes.trailing_zeros() as usize;
+            lanes &= lanes - 1;
+            if prims[l] < prims[best] {
+                best = l;
+            }
+        }
+        Some((best, t0, u.to_array()[best], v.to_array()[best]))
+    }
+
+    /// The test behind [`Self::hits`], its hit lanes as a lane mask.
+    #[inline(always)]
+    fn test<const TIES: bool>(&self, o: [F8; 3], d: [F8; 3], t_max: f32) -> (M8, F8, F8, F8) {
         // Sums left to right, as `a.x * b.x + a.y * b.y + a.z * b.z`.
         let dot = |a: &[F8; 3], b: &[F8; 3]| a[0].mul(b[0]).add(a[1].mul(b[1])).add(a[2].mul(b[2]));
         let w = [
@@ -118,7 +197,7 @@ impl TriPack {
         // The last edge: `u + v ≤ 1` for triangles, `v ≤ 1` for
         // parallelograms (the sign bit of N.x).
         let edge = self.n[0].sign_mask().select(v, u.add(v));
-        (ok.and(edge.le(one)).bitmask(), t, u, v)
+        (ok.and(edge.le(one)), t, u, v)
     }
 }
 

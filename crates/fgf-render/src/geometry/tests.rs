@@ -284,6 +284,111 @@ fn queries_match_brute_force_on_mixed_primitives() {
     assert!(n_hits > 1000, "too few hits to test anything: {n_hits}");
 }
 
+/// A scene that is one pack (a cube, two rectangles: the reference media
+/// scenes' shapes) answers the queries of the nearest hit and of the two
+/// nearest without the walk ([`Geometry::lone_pack`]), and gives the
+/// walk's answers bit for bit:
+/// random rays from outside and inside the cube, rays aimed at its edges
+/// and corners (where two faces meet at the same distance, and the tie
+/// rule decides), rays in the planes of its faces, random `t_max`.
+#[test]
+fn lone_pack_gives_the_walks_hits() {
+    let mut s = crate::math::Sampler::new(21, 0, 0);
+    let r3 = |s: &mut crate::math::Sampler| Vec3::new(s.next_1d(), s.next_1d(), s.next_1d());
+    let cube = Mat4::from_scale_rotation_translation(
+        Vec3::splat(0.5),
+        glam::Quat::from_rotation_y(0.3),
+        Vec3::new(0.0, 0.75, 0.0),
+    );
+    let shapes = [
+        plain_shape(GeometryDesc::Cube, cube),
+        plain_shape(
+            GeometryDesc::Rectangle,
+            Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2)
+                * Mat4::from_scale(Vec3::splat(4.0)),
+        ),
+        plain_shape(
+            GeometryDesc::Rectangle,
+            Mat4::from_translation(Vec3::new(-2.5, 2.0, 0.5)) * Mat4::from_scale(Vec3::splat(0.25)),
+        ),
+    ];
+    let mut g = Geometry::build(&shapes).unwrap();
+    assert!(g.lone_pack, "8 parallelograms should be one pack");
+    let bits =
+        |r: Option<HitRecord>| r.map(|HitRecord((p, t, u, v))| (p, [t, u, v].map(f32::to_bits)));
+    let hit_bits =
+        |h: Option<Hit>| h.map(|h| (h.prim, h.t.to_bits(), h.p.to_array().map(f32::to_bits)));
+    let corner = |s: &mut crate::math::Sampler| {
+        let c = (r3(s) * 2.0).floor() * 2.0 - Vec3::ONE;
+        cube.transform_point3(c)
+    };
+    let (mut ties, mut seconds) = (0, 0);
+    for k in 0..20_000 {
+        let (o, target) = match k % 4 {
+            // From anywhere toward anywhere.
+            0 => (
+                r3(&mut s) * 6.0 - Vec3::splat(3.0),
+                r3(&mut s) * 2.0 - Vec3::ONE,
+            ),
+            // From inside the cube.
+            1 => (
+                cube.transform_point3(r3(&mut s) - Vec3::splat(0.5)),
+                r3(&mut s),
+            ),
+            // Toward a point on an edge, or a corner.
+            2 => {
+                let (a, b) = (corner(&mut s), corner(&mut s));
+                let u = if s.next_1d() < 0.5 { 0.0 } else { s.next_1d() };
+                (r3(&mut s) * 6.0 - Vec3::splat(3.0), a + (b - a) * u)
+            }
+            // Along an edge of the cube (in the planes of two faces).
+            _ => {
+                let (a, b) = (corner(&mut s), corner(&mut s));
+                (a + (a - b) * (1.0 + s.next_1d()), b)
+            }
+        };
+        let d = (target - o).normalize();
+        if !d.is_finite() {
+            continue;
+        }
+        let ray = Ray {
+            o: o.into(),
+            d: d.into(),
+        };
+        let t_max = if k % 3 == 0 {
+            1.0 + 4.0 * s.next_1d()
+        } else {
+            f32::INFINITY
+        };
+        g.lone_pack = true;
+        let (a1, a2) = g.intersect2(&ray, t_max);
+        let a0 = g.intersect(&ray, t_max);
+        g.lone_pack = false;
+        let (b1, b2) = g.intersect2(&ray, t_max);
+        let b0 = g.intersect(&ray, t_max);
+        assert_eq!(
+            hit_bits(a0),
+            hit_bits(b0),
+            "nearest alone, ray {ray:?}, t_max {t_max}"
+        );
+        assert_eq!(
+            hit_bits(a1),
+            hit_bits(b1),
+            "nearest, ray {ray:?}, t_max {t_max}"
+        );
+        assert_eq!(bits(a2), bits(b2), "second, ray {ray:?}, t_max {t_max}");
+        if let (Some(h), Some(HitRecord((_, t, _, _)))) = (a1, a2) {
+            seconds += 1;
+            ties += usize::from(h.t == t);
+        }
+    }
+    // The rays hit twice often, and at ties now and then.
+    assert!(
+        seconds > 5_000 && ties > 20,
+        "seconds {seconds}, ties {ties}"
+    );
+}
+
 /// Parallelograms sample points uniformly over their whole area, and a
 /// cube's area is that of its six faces.
 #[test]
