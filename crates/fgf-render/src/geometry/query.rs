@@ -3,7 +3,8 @@
 //! triangles 8 at a time and its spheres and disks analytically. In a scene
 //! of one pack of triangles (a medium's box, a floor and a light), the
 //! nearest and the two nearest hits are picked from the pack's 8 lanes with
-//! lane minimums instead of a branch per hit: the same answers.
+//! lane minimums instead of a branch per hit, and every hit of a segment
+//! comes from the pack test alone: the same answers.
 
 use super::bvh::{Aabb, Beam, BEAM, PACK};
 use super::pack::splat_ray;
@@ -403,6 +404,26 @@ impl Geometry {
         t_max: f32,
         mut visit: impl FnMut(u32, u32, f32, Vec3A) -> bool,
     ) -> bool {
+        if self.lone_pack {
+            // The walk's visits below, in the same (lane) order.
+            let (start, prims) = self.lone_prims();
+            let (o, d) = splat_ray(ray);
+            let (mut mask, t, _, _) = self.packs[start / PACK].hits::<false>(o, d, t_max);
+            if mask == 0 {
+                return true;
+            }
+            let t = t.to_array();
+            while mask != 0 {
+                let l = mask.trailing_zeros() as usize;
+                mask &= mask - 1;
+                let p = prims[l];
+                let tri = &self.tris[(p & INDEX_MASK) as usize];
+                if !visit(p, tri.shape, t[l], tri.n) {
+                    return false;
+                }
+            }
+            return true;
+        }
         let mut go = true;
         self.bvh.traverse_leaves::<false>(
             ray.o,

@@ -285,9 +285,10 @@ fn queries_match_brute_force_on_mixed_primitives() {
 }
 
 /// A scene that is one pack (a cube, two rectangles: the reference media
-/// scenes' shapes) answers the queries of the nearest hit and of the two
-/// nearest without the walk ([`Geometry::lone_pack`]), and gives the
-/// walk's answers bit for bit:
+/// scenes' shapes) answers the queries of the nearest hit, of the two
+/// nearest and of every crossing without the walk
+/// ([`Geometry::lone_pack`]), and gives the walk's answers bit for bit
+/// (the crossings in the same order):
 /// random rays from outside and inside the cube, rays aimed at its edges
 /// and corners (where two faces meet at the same distance, and the tie
 /// rule decides), rays in the planes of its faces, random `t_max`.
@@ -360,12 +361,32 @@ fn lone_pack_gives_the_walks_hits() {
         } else {
             f32::INFINITY
         };
+        // Every crossing, in the order visited, and the first alone.
+        let crossings = |g: &Geometry, stop: bool| {
+            let mut seen = Vec::new();
+            let open = g.for_each_hit(&ray, t_max, |p, shape, t, n| {
+                seen.push((p, shape, t.to_bits(), n.to_array().map(f32::to_bits)));
+                !stop
+            });
+            (open, seen)
+        };
         g.lone_pack = true;
         let (a1, a2) = g.intersect2(&ray, t_max);
         let a0 = g.intersect(&ray, t_max);
+        let (a3, a4) = (crossings(&g, false), crossings(&g, true));
         g.lone_pack = false;
         let (b1, b2) = g.intersect2(&ray, t_max);
         let b0 = g.intersect(&ray, t_max);
+        assert_eq!(
+            a3,
+            crossings(&g, false),
+            "crossings, ray {ray:?}, t_max {t_max}"
+        );
+        assert_eq!(
+            a4,
+            crossings(&g, true),
+            "first crossing, ray {ray:?}, t_max {t_max}"
+        );
         assert_eq!(
             hit_bits(a0),
             hit_bits(b0),
