@@ -107,14 +107,10 @@ impl TriPack {
         d: [F8; 3],
         t_max: f32,
     ) -> [Option<(usize, f32, f32, f32)>; 2] {
-        let (ok, t, u, v) = self.test::<false>(o, d, t_max);
-        // Lanes not hit at +∞; a hit's t is below t_max, so finite.
-        let inf = F8::splat(f32::INFINITY);
-        let t = ok.select(t, inf);
-        let t0 = t.hmin();
-        if t0 == f32::INFINITY {
+        let Some((t, t0, u, v)) = self.least(o, d, t_max) else {
             return [None, None];
-        }
+        };
+        let inf = F8::splat(f32::INFINITY);
         let (u, v) = (u.to_array(), v.to_array());
         let at = |l: u32, t: f32| {
             let l = l as usize;
@@ -148,12 +144,7 @@ impl TriPack {
         t_max: f32,
         prims: &[u32],
     ) -> Option<(usize, f32, f32, f32)> {
-        let (ok, t, u, v) = self.test::<false>(o, d, t_max);
-        let t = ok.select(t, F8::splat(f32::INFINITY));
-        let t0 = t.hmin();
-        if t0 == f32::INFINITY {
-            return None;
-        }
+        let (t, t0, u, v) = self.least(o, d, t_max)?;
         let mut lanes = t.le(F8::splat(t0)).bitmask();
         let mut best = lanes.trailing_zeros() as usize;
         lanes &= lanes - 1;
@@ -165,6 +156,17 @@ impl TriPack {
             }
         }
         Some((best, t0, u.to_array()[best], v.to_array()[best]))
+    }
+
+    /// [`Self::hits`] (without ties) as the lanes' distances, +∞ where
+    /// not hit, with the least of them (finite: below `t_max`) and the
+    /// lanes' `u`, `v`; `None` if no lane is hit.
+    #[inline(always)]
+    fn least(&self, o: [F8; 3], d: [F8; 3], t_max: f32) -> Option<(F8, f32, F8, F8)> {
+        let (ok, t, u, v) = self.test::<false>(o, d, t_max);
+        let t = ok.select(t, F8::splat(f32::INFINITY));
+        let t0 = t.hmin();
+        (t0 != f32::INFINITY).then_some((t, t0, u, v))
     }
 
     /// The test behind [`Self::hits`], its hit lanes as a lane mask.
