@@ -11,28 +11,41 @@
 //! content, so results are unaffected; where it is refused (an older
 //! kernel, another system, memory too fragmented) nothing changes.
 //! Measured in `docs/benchmarks.md` ("Shadow rays, huge pages, and where
-//! the mesh scene's time goes").
+//! the mesh scene's time goes", and "Huge pages for whole arrays").
 
-/// Ask for huge pages under the 2 MiB-aligned part of `v`'s memory (none
-/// for arrays below 2 MiB). Best effort: errors are ignored.
+/// Ask for huge pages under all of `v`'s memory if it is at least
+/// [`MIN_BYTES`]: every 2 MiB page it touches, one by one, the first and
+/// the last included although they may also hold other memory of the
+/// process (the advice changes no content; a page not wholly within one
+/// mapping is left as it is). A large allocation starts just past a 2 MiB
+/// boundary (after the allocator's header), so the pages wholly within `v`
+/// would leave out up to 4 MiB of it, and all of an array below 4 MiB.
+/// Best effort: errors are ignored.
 pub(crate) fn advise<T>(v: &[T]) {
     #[cfg(target_os = "linux")]
     {
         const HUGE: usize = 1 << 21;
         let start = v.as_ptr() as usize;
-        let end = start + std::mem::size_of_val(v);
-        let (a, b) = (start.next_multiple_of(HUGE), end & !(HUGE - 1));
-        if b > a {
-            // SAFETY: [a, b) lies within `v`'s allocation, which outlives
-            // the call; MADV_COLLAPSE keeps the memory's contents.
+        let bytes = std::mem::size_of_val(v);
+        if bytes < MIN_BYTES {
+            return;
+        }
+        let mut page = start & !(HUGE - 1);
+        while page < start + bytes {
+            // SAFETY: MADV_COLLAPSE keeps the contents of the memory it
+            // is given; an address that is not mapped makes it fail.
             unsafe {
-                libc::madvise(a as *mut libc::c_void, b - a, libc::MADV_COLLAPSE);
+                libc::madvise(page as *mut libc::c_void, HUGE, libc::MADV_COLLAPSE);
             }
+            page += HUGE;
         }
     }
     #[cfg(not(target_os = "linux"))]
     let _ = v;
 }
+
+/// Arrays below this many bytes are left on small pages: 64 of them.
+const MIN_BYTES: usize = 256 * 1024;
 
 #[cfg(test)]
 mod tests {
