@@ -54,7 +54,11 @@ impl Texture {
                 wrap,
                 to_uv,
             } => Texture::Bitmap {
-                image: image.clone(),
+                image: {
+                    // Hits read it anywhere (the scene's copy, shared).
+                    crate::huge::advise(&image.data);
+                    image.clone()
+                },
                 filter: *filter,
                 wrap: *wrap,
                 to_uv: *to_uv,

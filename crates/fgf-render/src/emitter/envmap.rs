@@ -163,14 +163,18 @@ impl Envmap {
         let row_alias = alias_table(&rows);
         // A row of zero weight is never chosen; its columns are uniform.
         let uniform = vec![1.0; nx];
-        let col_alias = weight
+        let col_alias: Vec<AliasBin> = weight
             .chunks_exact(nx)
             .zip(&rows)
             .flat_map(|(r, &sum)| alias_table(if sum > 0.0 { r } else { &uniform }))
             .collect();
         let cells = (nx * ny) as f64;
-        let cell_pdf = weight.iter().map(|x| (x / total * cells) as f32).collect();
+        let cell_pdf: Vec<f32> = weight.iter().map(|x| (x / total * cells) as f32).collect();
         let l = Mat3::from_mat4(to_world);
+        // Escaped rays and light samples read it anywhere.
+        crate::huge::advise(&data);
+        crate::huge::advise(&cell_pdf);
+        crate::huge::advise(&col_alias);
         Envmap {
             w,
             h,
