@@ -17,10 +17,10 @@
 /// [`MIN_BYTES`]: every 2 MiB page it touches, one by one, the first and
 /// the last included although they may also hold other memory of the
 /// process (the advice changes no content; a page not wholly within one
-/// mapping is left as it is). A large allocation starts just past a 2 MiB
-/// boundary (after the allocator's header), so the pages wholly within `v`
-/// would leave out up to 4 MiB of it, and all of an array below 4 MiB.
-/// Best effort: errors are ignored.
+/// mapping is left as it is). A large allocation starts anywhere in a
+/// 2 MiB page (the allocator maps it at some 4 KiB boundary), so the pages
+/// wholly within `v` would leave out up to 4 MiB of it, and all of an
+/// array below 2 MiB. Best effort: errors are ignored.
 pub(crate) fn advise<T>(v: &[T]) {
     #[cfg(target_os = "linux")]
     {
