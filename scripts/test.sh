@@ -1,14 +1,15 @@
 #!/usr/bin/env bash
 # Install everything and run every test: the lint gates (rustfmt, clippy,
-# mypy), Rust unit/property tests, the Python suite, then the slow
+# rustdoc, mypy), Rust unit/property tests, the Python suite, then the slow
 # statistical tests in their own release-mode step.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --test
 . .venv/bin/activate
-echo "== lint: cargo fmt --check, cargo clippy -D warnings, mypy"
+echo "== lint: cargo fmt --check, cargo clippy -D warnings, cargo doc -D warnings, mypy"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --release -- -D warnings
+RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps -q
 python -m mypy python/fgf
 echo "== cargo test (workspace)"
 cargo test --workspace --exclude fgf-py --release

@@ -127,7 +127,7 @@ pub fn read_exr_rgb(path: &Path) -> Result<(usize, usize, Vec<f32>)> {
     Ok((size.width(), size.height(), buf))
 }
 
-/// The sRGB transfer curve applied to a linear value already clamped to [0,1].
+/// The sRGB transfer curve applied to a linear value already clamped to `[0, 1]`.
 #[inline]
 pub fn srgb_encode(v: f32) -> f32 {
     if v <= 0.003_130_8 {
@@ -137,7 +137,7 @@ pub fn srgb_encode(v: f32) -> f32 {
     }
 }
 
-/// Linear values to 8-bit sRGB: `v * 2^exposure`, clamp to [0,1], encode.
+/// Linear values to 8-bit sRGB: `v * 2^exposure`, clamp to `[0, 1]`, encode.
 /// NaN maps to 0.
 pub fn to_srgb8(data: &[f32], exposure: f32) -> Vec<u8> {
     let scale = exposure.exp2();

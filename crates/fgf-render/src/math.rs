@@ -114,7 +114,7 @@ pub fn cosine_hemisphere_pdf(cos_theta: f32) -> f32 {
 /// Shirley–Chiu concentric map of the unit square to the unit disk. Its
 /// angle, `(π/4)·(oy/ox)` from the x axis or `π/2 − (π/4)·(ox/oy)`, is
 /// `1/8` of the ratio in turns from an axis: its sine and cosine come from
-/// [`sin_cos_2pi`] (and [`sample_concentric_disk8`] gives the same bits on
+/// [`sin_cos_2pi`] (and `sample_concentric_disk8` gives the same bits on
 /// eight lanes).
 pub fn sample_concentric_disk(u: [f32; 2]) -> [f32; 2] {
     let ox = 2.0 * u[0] - 1.0;

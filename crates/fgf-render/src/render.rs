@@ -107,7 +107,7 @@ impl Prepared {
     /// states of disjoint ranges gives the bits of one render of their union.
     ///
     /// On cancellation (checked between passes, and within the long passes
-    /// of [`Passes`]) the state of the passes finished is returned: its
+    /// of `Passes`) the state of the passes finished is returned: its
     /// `samples` is then less than the range's length, and it holds the
     /// samples `s0..s0 + samples`.
     pub fn render_range(

@@ -515,7 +515,7 @@ impl Bsdf {
     /// [`BsdfSample::null`]): `thindielectric`, `mask`. Under `volpath`
     /// the path tracer counts a sample of it as an index-matched crossing
     /// (no depth), as Mitsuba 3's volpath counts a `Null` lobe
-    /// ([`crate::World::thin_is_crossing`]).
+    /// ([`crate::world::World::thin_is_crossing`]).
     #[inline]
     pub fn has_null_lobe(&self) -> bool {
         matches!(

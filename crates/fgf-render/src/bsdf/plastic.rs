@@ -9,7 +9,7 @@
 //!   `(1/π) η⁻² t(θ_i) t(θ_o) cos θ_o`, where `t` is the transmittance of the
 //!   coating (`1 - F` smooth; rough: the refracted part of the rough
 //!   dielectric interface that is not masked, which is less than one minus
-//!   the reflection lobe's albedo, see [`lobe_transmittance`]; tabulated on
+//!   the reflection lobe's albedo, see `lobe_transmittance`; tabulated on
 //!   64 cosines and interpolated linearly as Mitsuba does) and `F_int` the
 //!   coating's internal diffuse reflectance.
 //! * The lobe is chosen with probabilities proportional to
@@ -162,7 +162,7 @@ impl Plastic {
 pub struct RoughPlastic {
     pub c: Coated,
     pub distr: Microfacet,
-    /// Coating transmittance `T(μ)` ([`lobe_transmittance`]) at
+    /// Coating transmittance `T(μ)` (`lobe_transmittance`) at
     /// `μ_i = max(1e-6, i/63)`. Shared, so that a textured BSDF's
     /// per-hit copy ([`super::Bsdf::at`]) does not allocate.
     pub t_ext: std::sync::Arc<[f32; TABLE_RES]>,

@@ -14,7 +14,7 @@
 //!   marginal over rows and the conditional over columns, each by an alias
 //!   table (`docs/theory.md` §7.20), then a point uniformly in it. The
 //!   solid-angle pdf is `p_uv / (2π² sin θ)`.
-//! * [`Envmap::sample8`] draws eight samples at once with the 8-lane
+//! * `Envmap::sample8` draws eight samples at once with the 8-lane
 //!   vectors of `crate::lanes` (gathers from the same tables), each with
 //!   the bits of [`Envmap::sample`]: the paths that go on in step
 //!   (`World::li_beam`) draw their light samples so.

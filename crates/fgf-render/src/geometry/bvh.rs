@@ -3,7 +3,7 @@
 //! (12 bins per axis, leaves of at most 8 primitives, tested as one SIMD
 //! pack of 8, with the SAH cost counted in packs), collapsed into an
 //! 8-wide tree whose nodes hold their children's boxes in SIMD form
-//! ([`F8`]: AVX, or two SSE halves in a portable build), and traversed
+//! (`F8`: AVX, or two SSE halves in a portable build), and traversed
 //! nearest child first with a small stack.
 //!
 //! We wrote our own rather than depend on a crate: it is a few hundred

@@ -98,7 +98,7 @@ impl Geometry {
     }
 
     /// Nearest hit with `t < t_max`, if any; of several at the nearest
-    /// distance, that of the least primitive id ([`keep_nearest`]).
+    /// distance, that of the least primitive id (`keep_nearest`).
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray, t_max: f32) -> Option<Hit> {
         self.nearest(ray, t_max).map(|r| self.make_hit(ray, r))
@@ -138,7 +138,7 @@ impl Geometry {
     }
 
     /// Start loading what [`Self::make_hit`] reads first for `r`: the hit
-    /// triangle's [`Corners`]. With [`Self::prefetch_shading`] once that
+    /// triangle's `Corners`. With [`Self::prefetch_shading`] once that
     /// has arrived, this lets the cache misses of several paths' hits
     /// overlap (`World::li_beam`).
     #[inline(always)]
@@ -150,7 +150,7 @@ impl Geometry {
 
     /// Start loading the rest of what [`Self::make_hit`] and
     /// [`Self::uv`] read for `r`: the hit triangle's vertices, their
-    /// normals and texture coordinates (its [`Corners`] are read here).
+    /// normals and texture coordinates (its `Corners` are read here).
     #[inline(always)]
     pub fn prefetch_shading(&self, r: &HitRecord) {
         let Some(c) = self.hit_corners(r) else {
@@ -183,7 +183,7 @@ impl Geometry {
     /// rays (`rays[j]` below `t_max[j]` into `out[j]`), as
     /// [`Self::intersect`] finds them one by one, by one traversal for all
     /// (`bvh/beam.rs`): every ray gets the hit its own query gives, the
-    /// tie rule of [`keep_nearest`] included. Rays that form no beam
+    /// tie rule of `keep_nearest` included. Rays that form no beam
     /// (directions of both signs along an axis) are traced one by one.
     pub fn intersect_beam(&self, rays: &[Ray], t_max: &[f32], out: &mut [Option<Hit>]) {
         let n = rays.len();

@@ -22,7 +22,7 @@
 //! * Russian roulette once the depth exceeds `rr_depth`: survival probability
 //!   `min(max(throughput)·η², 0.95)`.
 //! * `direct` (Mitsuba's direct-illumination integrator) is a separate
-//!   routine, [`World::li_direct`] in `direct_lighting.rs`.
+//!   routine, `World::li_direct` in `direct_lighting.rs`.
 //! * RGB throughput; media sample free flights with spectral MIS (see
 //!   [`crate::medium`]).
 //!
