@@ -1,5 +1,6 @@
 //! Large read-mostly arrays of a render (BVH nodes and leaf packs, triangle
-//! records, voxel grids) backed by 2 MiB pages where the system allows it.
+//! records, voxel grids, environment maps, bitmap textures) backed by 2 MiB
+//! pages where the system allows it.
 //!
 //! A traversal or a grid lookup touches a few bytes at scattered places of
 //! arrays that reach tens of MiB. With 4 KiB pages each such access needs

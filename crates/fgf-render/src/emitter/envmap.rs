@@ -171,7 +171,7 @@ impl Envmap {
         let cells = (nx * ny) as f64;
         let cell_pdf: Vec<f32> = weight.iter().map(|x| (x / total * cells) as f32).collect();
         let l = Mat3::from_mat4(to_world);
-        // Escaped rays and light samples read it anywhere.
+        // Escaped rays and light samples read them anywhere.
         crate::huge::advise(&data);
         crate::huge::advise(&cell_pdf);
         crate::huge::advise(&col_alias);
