@@ -45,7 +45,7 @@ pub(crate) fn advise<T>(v: &[T]) {
     let _ = v;
 }
 
-/// Arrays below this many bytes are left on small pages: 64 of them.
+/// Arrays below this many bytes (64 pages of 4 KiB) are left as they are.
 const MIN_BYTES: usize = 256 * 1024;
 
 #[cfg(test)]
