@@ -33,6 +33,7 @@ Exit status 2 on bad arguments (a missing scene, an unknown revision), with one 
 from __future__ import annotations
 
 import argparse
+import io
 import math
 import random
 import re
@@ -63,14 +64,13 @@ def build(rev: str, work: Path) -> Path:
             fail(f"--old/--new: {rev!r} is not a revision of {ROOT}")
         name = got.stdout.strip()[:12]
         src = work / name
+        if src.exists():  # --old and --new name the same commit
+            return ROOT / "target" / "ab" / name / "release" / "examples" / "render_scene"
         src.mkdir()
         archive = subprocess.run(["git", "-C", str(ROOT), "archive", "--format=tar", name],
                                  capture_output=True, check=True).stdout
-        with tempfile.TemporaryFile() as f:
-            f.write(archive)
-            f.seek(0)
-            with tarfile.open(fileobj=f) as tar:
-                tar.extractall(src, filter="data")
+        with tarfile.open(fileobj=io.BytesIO(archive)) as tar:
+            tar.extractall(src, filter="data")
     target = ROOT / "target" / "ab" / name
     print(f"ab_render: building render_scene of {rev} ({name}) in {target}", file=sys.stderr)
     # The tree's own directory as the working directory: cargo reads the
@@ -85,7 +85,8 @@ def run(binary: Path, scene: Path, spp: int, threads: int, defines: list[str]) -
                          cwd=scene.parent, capture_output=True, text=True)
     m = LINE.search(out.stdout)
     if out.returncode != 0 or m is None:
-        fail(f"{binary}: {(out.stderr or out.stdout).strip().splitlines()[-1:]}")
+        last = (out.stderr or out.stdout).strip().splitlines()
+        fail(f"{binary} {scene.name}: {last[-1] if last else f'exit {out.returncode}'}")
     assert m is not None
     return float(m.group(1)), m.group(2)
 
@@ -134,6 +135,8 @@ def main(argv: list[str] | None = None) -> int:
         return 130
     except subprocess.CalledProcessError as e:
         fail(f"{' '.join(map(str, e.cmd[:3]))} failed (exit {e.returncode})")
+    except OSError as e:
+        fail(f"{e.filename or ''}: {e.strerror}")
     logs = [math.log(x) for x in ratios]
     geo = math.exp(statistics.fmean(logs))
     # Two standard errors of the mean log ratio: a change inside this band is
