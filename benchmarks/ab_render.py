@@ -127,6 +127,8 @@ def main(argv: list[str] | None = None) -> int:
                 got[k] = t
                 times[k].append(t)
                 hashes[k].add(h)
+            if min(got.values()) <= 0.0:
+                fail("a render took under a millisecond: raise --spp or the resolution")
             ratios.append(got["new"] / got["old"])
             print(f"round {r + 1:2}: old {got['old']:.3f} s  new {got['new']:.3f} s  new/old {ratios[-1]:.3f}",
                   file=sys.stderr)
