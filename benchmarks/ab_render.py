@@ -43,12 +43,13 @@ import sys
 import tarfile
 import tempfile
 from pathlib import Path
+from typing import NoReturn
 
 ROOT = Path(__file__).resolve().parent.parent
 LINE = re.compile(r"^([0-9.]+) s .* hash ([0-9a-f]+)")
 
 
-def fail(msg: str) -> None:
+def fail(msg: str) -> NoReturn:
     print(f"ab_render: {msg}", file=sys.stderr)
     raise SystemExit(2)
 
@@ -87,7 +88,6 @@ def run(binary: Path, scene: Path, spp: int, threads: int, defines: list[str]) -
     if out.returncode != 0 or m is None:
         last = (out.stderr or out.stdout).strip().splitlines()
         fail(f"{binary} {scene.name}: {last[-1] if last else f'exit {out.returncode}'}")
-    assert m is not None
     return float(m.group(1)), m.group(2)
 
 
