@@ -27,6 +27,9 @@ pub struct Homogeneous {
     /// The three channels of `sigma_t` are equal: one exponential per
     /// flight, and the hero weights' channel ratios are exactly 1.
     grey: bool,
+    /// `sigma_s / sigma_t` where the medium is grey with `sigma_t > 0`
+    /// (its free flights' weight at a scattering event), else unused.
+    albedo: Spectrum,
 }
 
 /// `e^{-σ t}` per channel with `0·∞ = 0` (a channel without extinction
@@ -53,11 +56,17 @@ fn tr1(sigma: f32, t: f32) -> f32 {
 
 impl Homogeneous {
     pub fn new(sigma_t: Spectrum, albedo: Spectrum, phase: Phase) -> Self {
+        let sigma_s = sigma_t * albedo;
         Homogeneous {
             sigma_t,
-            sigma_s: sigma_t * albedo,
+            sigma_s,
             phase,
             grey: sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z,
+            albedo: if sigma_t.x > 0.0 {
+                sigma_s / sigma_t.x
+            } else {
+                Spectrum::ZERO
+            },
         }
     }
 
@@ -108,30 +117,24 @@ impl Homogeneous {
         };
         if self.grey {
             // Every channel is the hero: the ratios σ·Tr / (σ_h·Tr_h) and
-            // Tr / Tr_h below are x/x = 1 exactly, so only the scattering
-            // weight is computed (with the same operations, hence bits).
-            let sigma = self.sigma_t.x;
+            // Tr / Tr_h are 1, and the weights need no exponential. At a
+            // scattering event σ_s·Tr / (σ·Tr) is the albedo. At the surface
+            // Tr / Tr = 1: Tr(t_max) > 0, because t ≥ t_max and σ·t =
+            // -ln(1 - u) ≤ 24·ln 2 (or σ = 0, where Tr = 1).
             if t < t_max {
-                let trv = tr1(sigma, t);
-                let pdf_h = sigma * trv;
                 return (
                     DistanceSample {
                         t,
-                        weight: self.sigma_s * trv / pdf_h,
+                        weight: self.albedo,
                         event: DistanceEvent::Scatter,
                     },
                     Spectrum::ONE,
                 );
             }
-            let w = if tr1(sigma, t_max) > 0.0 {
-                Spectrum::ONE
-            } else {
-                Spectrum::ZERO
-            };
             return (
                 DistanceSample {
                     t: t_max,
-                    weight: w,
+                    weight: Spectrum::ONE,
                     event: DistanceEvent::Surface,
                 },
                 Spectrum::ONE,
