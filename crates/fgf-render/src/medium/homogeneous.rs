@@ -182,3 +182,46 @@ impl Homogeneous {
         tr(self.sigma_t, t_end)
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A grey medium's hero flights: the albedo at every scattering event,
+    /// 1 at every surface (never 0, even for the longest flights), and the
+    /// surface reached with probability `e^{-σ t_max}` (within 5 standard
+    /// errors, fixed seed).
+    #[test]
+    fn grey_hero_flights_weigh_the_albedo_and_reach_the_surface_at_the_rate_of_tr() {
+        let (sigma, albedo, t_max) = (4.0f32, 0.8f32, 0.3f32);
+        let m = Homogeneous::new(
+            Spectrum::splat(sigma),
+            Spectrum::splat(albedo),
+            Phase::Isotropic,
+        );
+        let n = 200_000u64;
+        let mut surface = 0u64;
+        for i in 0..n {
+            let mut s = Sampler::new(11, i, 0);
+            let (ds, r) = m.sample_distance_hero(t_max, (i % 3) as usize, &mut s);
+            assert_eq!(r, Spectrum::ONE);
+            match ds.event {
+                DistanceEvent::Scatter => {
+                    assert!(ds.t < t_max);
+                    assert!((ds.weight - Spectrum::splat(albedo)).abs().max_element() < 1e-6);
+                }
+                DistanceEvent::Surface => {
+                    assert_eq!((ds.t, ds.weight), (t_max, Spectrum::ONE));
+                    surface += 1;
+                }
+            }
+        }
+        let p = (-(sigma * t_max) as f64).exp();
+        let se = (p * (1.0 - p) / n as f64).sqrt();
+        let got = surface as f64 / n as f64;
+        assert!(
+            (got - p).abs() < 5.0 * se,
+            "P(surface) {got} against {p} ± {se}"
+        );
+    }
+}
