@@ -36,12 +36,7 @@ pub struct Homogeneous {
 /// transmits everything, even over an infinite distance).
 #[inline]
 fn tr(sigma_t: Spectrum, t: f32) -> Spectrum {
-    let f = |s: f32| tr1(s, t);
-    // Grey media (the common case) need one exponential, not three.
-    if sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z {
-        return Spectrum::splat(f(sigma_t.x));
-    }
-    Spectrum::new(f(sigma_t.x), f(sigma_t.y), f(sigma_t.z))
+    Spectrum::new(tr1(sigma_t.x, t), tr1(sigma_t.y, t), tr1(sigma_t.z, t))
 }
 
 /// [`tr`] of one channel.
@@ -70,6 +65,15 @@ impl Homogeneous {
         }
     }
 
+    /// [`tr`] of this medium; a grey one needs one exponential, not three.
+    #[inline]
+    fn tr(&self, t: f32) -> Spectrum {
+        if self.grey {
+            return Spectrum::splat(tr1(self.sigma_t.x, t));
+        }
+        tr(self.sigma_t, t)
+    }
+
     pub fn sample_distance(&self, _ray: &Ray, t_max: f32, s: &mut Sampler) -> DistanceSample {
         let c = bin_index(s.next_1d() * 3.0, 3);
         let sigma_c = self.sigma_t[c];
@@ -80,7 +84,7 @@ impl Homogeneous {
             f32::INFINITY
         };
         if t < t_max {
-            let trv = tr(self.sigma_t, t);
+            let trv = self.tr(t);
             let pdf = mean(self.sigma_t * trv);
             DistanceSample {
                 t,
@@ -88,7 +92,7 @@ impl Homogeneous {
                 event: DistanceEvent::Scatter,
             }
         } else {
-            let trv = tr(self.sigma_t, t_max);
+            let trv = self.tr(t_max);
             let p = mean(trv);
             let weight = if p > 0.0 { trv / p } else { Spectrum::ZERO };
             DistanceSample {
@@ -179,7 +183,7 @@ impl Homogeneous {
 
     #[inline]
     pub fn transmittance(&self, t_end: f32) -> Spectrum {
-        tr(self.sigma_t, t_end)
+        self.tr(t_end)
     }
 }
 
