@@ -644,15 +644,18 @@ impl World {
                 let med = &world.media[m as usize];
                 let (ds, r) = med.sample_distance_spectral(&ray, t_surf, start, hero, s);
                 thr *= ds.weight;
-                r_u *= r;
-                // Only ratios matter: rescale thr and r_u together so that
-                // neither under- nor overflows on long paths.
-                let rm = max_comp(r_u);
-                if !(1e-4..=1e4).contains(&rm) && rm > 0.0 {
-                    r_u /= rm;
-                    thr /= rm;
+                // (Grey media give ratios of exactly 1: nothing to update.)
+                if r != Spectrum::ONE {
+                    r_u *= r;
+                    // Only ratios matter: rescale thr and r_u together so
+                    // that neither under- nor overflows on long paths.
+                    let rm = max_comp(r_u);
+                    if !(1e-4..=1e4).contains(&rm) && rm > 0.0 {
+                        r_u /= rm;
+                        thr /= rm;
+                    }
+                    inv_mis = 1.0 / crate::spectrum::mean(r_u);
                 }
-                inv_mis = 1.0 / crate::spectrum::mean(r_u);
                 if ds.event == DistanceEvent::Scatter {
                     depth += 1;
                     if depth >= world.max_depth || thr == Spectrum::ZERO {
