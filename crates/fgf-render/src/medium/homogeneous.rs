@@ -27,8 +27,8 @@ pub struct Homogeneous {
     /// The three channels of `sigma_t` are equal: one exponential per
     /// flight, and the hero weights' channel ratios are exactly 1.
     grey: bool,
-    /// `sigma_s / sigma_t` where the medium is grey with `sigma_t > 0`
-    /// (its free flights' weight at a scattering event), else unused.
+    /// The single-scattering albedo `sigma_s / sigma_t`: the weight of a
+    /// grey medium's free flights at a scattering event.
     albedo: Spectrum,
 }
 
@@ -51,17 +51,12 @@ fn tr1(sigma: f32, t: f32) -> f32 {
 
 impl Homogeneous {
     pub fn new(sigma_t: Spectrum, albedo: Spectrum, phase: Phase) -> Self {
-        let sigma_s = sigma_t * albedo;
         Homogeneous {
             sigma_t,
-            sigma_s,
+            sigma_s: sigma_t * albedo,
             phase,
             grey: sigma_t.x == sigma_t.y && sigma_t.y == sigma_t.z,
-            albedo: if sigma_t.x > 0.0 {
-                sigma_s / sigma_t.x
-            } else {
-                Spectrum::ZERO
-            },
+            albedo,
         }
     }
 
@@ -212,7 +207,7 @@ mod tests {
             match ds.event {
                 DistanceEvent::Scatter => {
                     assert!(ds.t < t_max);
-                    assert!((ds.weight - Spectrum::splat(albedo)).abs().max_element() < 1e-6);
+                    assert_eq!(ds.weight, Spectrum::splat(albedo));
                 }
                 DistanceEvent::Surface => {
                     assert_eq!((ds.t, ds.weight), (t_max, Spectrum::ONE));
