@@ -85,7 +85,7 @@ impl Aabb {
 }
 
 /// A node of the binary tree that the build makes.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 struct Node {
     min: Vec3A,
     max: Vec3A,
@@ -229,7 +229,7 @@ impl Bvh {
         let centroids: Vec<Vec3A> = bounds.iter().map(|b| b.centroid()).collect();
         let mut nodes = Vec::with_capacity(2 * bounds.len().max(1));
         if !bounds.is_empty() {
-            build_rec(bounds, &centroids, &mut order, 0, bounds.len(), &mut nodes);
+            build_rec(bounds, &centroids, &mut order, 0, PAR_MIN, &mut nodes);
         }
         let padded = pad_leaves(&mut nodes, &order);
         // The tree is chosen on the primitives' own bounds, then every box
@@ -748,28 +748,38 @@ pub(super) fn slab_hit_finite8(
     tn.le(tf.mul(F8::splat(1.000_000_4))).bitmask()
 }
 
+/// Subtrees of at least this many primitives have their two halves built
+/// on two threads ([`build_rec`]).
+const PAR_MIN: usize = 4096;
+
+/// Build the binary subtree of the primitives `order` (which start at
+/// `start` in the whole order) into `nodes`, in pre-order, and return its
+/// root's index; `order` is partitioned in place. The two halves of a
+/// subtree of `par_min` primitives or more are built in parallel, each
+/// into a vector of its own that is then appended: the same nodes, in the
+/// same order, as a build on one thread.
 fn build_rec(
     bounds: &[Aabb],
     centroids: &[Vec3A],
     order: &mut [u32],
     start: usize,
-    end: usize,
+    par_min: usize,
     nodes: &mut Vec<Node>,
 ) -> usize {
     let node_idx = nodes.len();
     let mut bb = Aabb::EMPTY;
     let mut cb = Aabb::EMPTY;
-    for &p in &order[start..end] {
+    for &p in order.iter() {
         bb = bb.union(bounds[p as usize]);
         cb = cb.grow(centroids[p as usize]);
     }
+    let n = order.len();
     nodes.push(Node {
         min: bb.min,
         max: bb.max,
         offset: start as u32,
-        count: (end - start) as u16,
+        count: n as u16,
     });
-    let n = end - start;
     if n <= PACK {
         return node_idx;
     }
@@ -791,7 +801,7 @@ fn build_rec(
         }
         let mut bin_bounds = [Aabb::EMPTY; BINS];
         let mut bin_count = [0usize; BINS];
-        for &p in &order[start..end] {
+        for &p in order.iter() {
             let b = bin(p, axis);
             bin_count[b] += 1;
             bin_bounds[b] = bin_bounds[b].union(bounds[p as usize]);
@@ -837,34 +847,92 @@ fn build_rec(
             {
                 return node_idx;
             }
-            let slice = &mut order[start..end];
             let mut i = 0;
-            for j in 0..slice.len() {
-                if bin(slice[j], axis) < split {
-                    slice.swap(i, j);
+            for j in 0..n {
+                if bin(order[j], axis) < split {
+                    order.swap(i, j);
                     i += 1;
                 }
             }
-            start + i
+            i
         }
         None => {
             // All centroids coincide: split by count so leaves stay small.
             if n <= MAX_LEAF {
                 return node_idx;
             }
-            start + n / 2
+            n / 2
         }
     };
     nodes[node_idx].count = 0;
-    build_rec(bounds, centroids, order, start, mid, nodes);
-    let right = build_rec(bounds, centroids, order, mid, end, nodes);
-    nodes[node_idx].offset = right as u32;
+    let (left, right) = order.split_at_mut(mid);
+    let right_idx = if n >= par_min {
+        let (mut l, mut r) = (Vec::new(), Vec::new());
+        rayon::join(
+            || build_rec(bounds, centroids, left, start, par_min, &mut l),
+            || build_rec(bounds, centroids, right, start + mid, par_min, &mut r),
+        );
+        // Interior nodes point at their second child by index: shift them
+        // by where their subtree lands.
+        let mut append = |sub: Vec<Node>| {
+            let at = nodes.len() as u32;
+            nodes.extend(sub.into_iter().map(|mut node| {
+                if node.count == 0 {
+                    node.offset += at;
+                }
+                node
+            }));
+            at as usize
+        };
+        append(l);
+        append(r)
+    } else {
+        build_rec(bounds, centroids, left, start, par_min, nodes);
+        build_rec(bounds, centroids, right, start + mid, par_min, nodes)
+    };
+    nodes[node_idx].offset = right_idx as u32;
     node_idx
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The build on two threads makes the tree of the build on one, node
+    /// for node and in the same order, with the same order of primitives:
+    /// random boxes, clusters of boxes with one centroid (split by count),
+    /// and enough of them for parallel halves several levels deep.
+    #[test]
+    fn parallel_build_makes_the_serial_tree() {
+        let mut s = crate::math::Sampler::new(3, 0, 0);
+        let mut bounds = Vec::new();
+        for i in 0..40_000 {
+            let c = if i % 10 == 0 {
+                Vec3A::splat(0.25)
+            } else {
+                Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d() * 0.1)
+            };
+            let h = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.01;
+            bounds.push(Aabb {
+                min: c - h,
+                max: c + h,
+            });
+        }
+        let centroids: Vec<Vec3A> = bounds.iter().map(|b| b.centroid()).collect();
+        let build = |par_min: usize| {
+            let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
+            let mut nodes = Vec::new();
+            build_rec(&bounds, &centroids, &mut order, 0, par_min, &mut nodes);
+            (nodes, order)
+        };
+        let (serial, serial_order) = build(usize::MAX);
+        for par_min in [PAR_MIN, 64] {
+            let (nodes, order) = build(par_min);
+            assert_eq!(order, serial_order, "par_min {par_min}");
+            assert!(nodes == serial, "par_min {par_min}: the trees differ");
+        }
+        assert!(serial.len() > 2 * 40_000 / PACK);
+    }
 
     /// A ray with a zero direction component whose origin lies on one of
     /// the box's planes along that axis touches the box's face: both slab
