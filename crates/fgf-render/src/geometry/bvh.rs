@@ -755,9 +755,9 @@ const PAR_MIN: usize = 4096;
 /// Build the binary subtree of the primitives `order` (which start at
 /// `start` in the whole order) into `nodes`, in pre-order, and return its
 /// root's index; `order` is partitioned in place. The two halves of a
-/// subtree of `par_min` primitives or more are built in parallel, each
-/// into a vector of its own that is then appended: the same nodes, in the
-/// same order, as a build on one thread.
+/// subtree of `par_min` primitives or more are built in parallel, the
+/// second into a vector of its own that is then appended: the same nodes,
+/// in the same order, as a build on one thread.
 fn build_rec(
     bounds: &[Aabb],
     centroids: &[Vec3A],
@@ -867,25 +867,23 @@ fn build_rec(
     nodes[node_idx].count = 0;
     let (left, right) = order.split_at_mut(mid);
     let right_idx = if n >= par_min {
-        let (mut l, mut r) = (Vec::new(), Vec::new());
+        // The first half into `nodes` itself, the second into a vector of
+        // its own, appended after it.
+        let mut r = Vec::new();
         rayon::join(
-            || build_rec(bounds, centroids, left, start, par_min, &mut l),
+            || build_rec(bounds, centroids, left, start, par_min, nodes),
             || build_rec(bounds, centroids, right, start + mid, par_min, &mut r),
         );
-        // Interior nodes point at their second child by index: shift them
-        // by where their subtree lands.
-        let mut append = |sub: Vec<Node>| {
-            let at = nodes.len() as u32;
-            nodes.extend(sub.into_iter().map(|mut node| {
-                if node.count == 0 {
-                    node.offset += at;
-                }
-                node
-            }));
-            at as usize
-        };
-        append(l);
-        append(r)
+        // Its interior nodes point at their second child by index within
+        // `r`: shift them by where it lands.
+        let at = nodes.len();
+        nodes.extend(r.into_iter().map(|mut node| {
+            if node.count == 0 {
+                node.offset += at as u32;
+            }
+            node
+        }));
+        at
     } else {
         build_rec(bounds, centroids, left, start, par_min, nodes);
         build_rec(bounds, centroids, right, start + mid, par_min, nodes)
