@@ -25,7 +25,8 @@ pub struct Homogeneous {
     pub sigma_s: Spectrum,
     pub phase: Phase,
     /// The three channels of `sigma_t` are equal: one exponential per
-    /// flight, and the hero weights' channel ratios are exactly 1.
+    /// transmittance, none per free flight, and the hero weights' channel
+    /// ratios are exactly 1.
     grey: bool,
     /// The single-scattering albedo `sigma_s / sigma_t`: the weight of a
     /// grey medium's free flights at a scattering event.
