@@ -345,7 +345,7 @@ impl Builder {
     /// order (each leaf starting a pack of `bvh::PACK`) and the packs.
     fn finish(self) -> Geometry {
         let bounds: Vec<Aabb> = self.prims.iter().map(|&p| self.prim_bounds(p)).collect();
-        let (bvh, order) = Bvh::build(&bounds);
+        let (bvh, order) = Bvh::build(bounds);
         // Store primitives in leaf order so traversal reads them contiguously.
         let prims: Vec<u32> = order
             .iter()

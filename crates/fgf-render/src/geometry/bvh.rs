@@ -219,17 +219,17 @@ fn packs(n: usize) -> f32 {
 }
 
 impl Bvh {
-    /// Build over primitives given by their bounds. Returns the hierarchy
+    /// Build over primitives given by their bounds (which it reorders as
+    /// it goes). Returns the hierarchy
     /// and the order it puts the primitives in: every leaf is a range of
     /// that order starting at a multiple of [`PACK`], the gaps between
     /// leaves filled with `None`, so that a leaf's primitives can be stored
     /// contiguously and tested in SIMD packs.
-    pub fn build(bounds: &[Aabb]) -> (Bvh, Vec<Option<u32>>) {
+    pub fn build(mut bounds: Vec<Aabb>) -> (Bvh, Vec<Option<u32>>) {
         let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
-        let centroids: Vec<Vec3A> = bounds.iter().map(|b| b.centroid()).collect();
         let mut nodes = Vec::with_capacity(2 * bounds.len().max(1));
         if !bounds.is_empty() {
-            build_rec(bounds, &centroids, &mut order, 0, PAR_MIN, &mut nodes);
+            build_rec(&mut bounds, &mut order, 0, PAR_MIN, &mut nodes);
         }
         let padded = pad_leaves(&mut nodes, &order);
         // The tree is chosen on the primitives' own bounds, then every box
@@ -753,14 +753,15 @@ pub(super) fn slab_hit_finite8(
 const PAR_MIN: usize = 4096;
 
 /// Build the binary subtree of the primitives `order` (which start at
-/// `start` in the whole order) into `nodes`, in pre-order, and return its
-/// root's index; `order` is partitioned in place. The two halves of a
-/// subtree of `par_min` primitives or more are built in parallel, the
-/// second into a vector of its own that is then appended: the same nodes,
-/// in the same order, as a build on one thread.
+/// `start` in the whole order; `refs` holds their bounds, in the same
+/// order) into `nodes`, in pre-order, and return its root's index; `order`
+/// and `refs` are partitioned in place together, so that every pass over a
+/// node's primitives reads their bounds in sequence, not through `order`.
+/// The two halves of a subtree of `par_min` primitives or more are built
+/// in parallel, the second into a vector of its own that is then appended:
+/// the same nodes, in the same order, as a build on one thread.
 fn build_rec(
-    bounds: &[Aabb],
-    centroids: &[Vec3A],
+    refs: &mut [Aabb],
     order: &mut [u32],
     start: usize,
     par_min: usize,
@@ -769,9 +770,9 @@ fn build_rec(
     let node_idx = nodes.len();
     let mut bb = Aabb::EMPTY;
     let mut cb = Aabb::EMPTY;
-    for &p in order.iter() {
-        bb = bb.union(bounds[p as usize]);
-        cb = cb.grow(centroids[p as usize]);
+    for r in refs.iter() {
+        bb = bb.union(*r);
+        cb = cb.grow(r.centroid());
     }
     let n = order.len();
     nodes.push(Node {
@@ -786,26 +787,28 @@ fn build_rec(
     // Choose the axis and bin boundary of least SAH cost.
     let extent = cb.max - cb.min;
     let scale = Vec3A::splat(BINS as f32) / extent;
-    // The bin of primitive `p`'s centroid along `axis`: one function for
-    // the SAH sweep and the partition, which must agree.
-    let bin = |p: u32, axis: usize| {
-        bin_index(
-            (centroids[p as usize][axis] - cb.min[axis]) * scale[axis],
-            BINS,
-        )
+    // The bins of a box's centroid along the three axes: one function for
+    // the SAH sweep and the partition, which must agree. (Along an axis
+    // of no extent the bin is meaningless and not used.)
+    let bins = |r: &Aabb| {
+        let x = (r.centroid() - cb.min) * scale;
+        [x.x, x.y, x.z].map(|x| bin_index(x, BINS))
     };
+    // All three axes binned in one pass over the boxes.
+    let mut bin_bounds = [[Aabb::EMPTY; BINS]; 3];
+    let mut bin_count = [[0usize; BINS]; 3];
+    for r in refs.iter() {
+        for (axis, b) in bins(r).into_iter().enumerate() {
+            bin_count[axis][b] += 1;
+            bin_bounds[axis][b] = bin_bounds[axis][b].union(*r);
+        }
+    }
     let mut best: Option<(f32, usize, usize)> = None;
     for axis in 0..3 {
         if extent[axis] <= 0.0 {
             continue;
         }
-        let mut bin_bounds = [Aabb::EMPTY; BINS];
-        let mut bin_count = [0usize; BINS];
-        for &p in order.iter() {
-            let b = bin(p, axis);
-            bin_count[b] += 1;
-            bin_bounds[b] = bin_bounds[b].union(bounds[p as usize]);
-        }
+        let (bin_bounds, bin_count) = (&bin_bounds[axis], &bin_count[axis]);
         // Sweep from the right to get the suffix areas, then from the left.
         let mut right_area = [0f32; BINS];
         let mut right_count = [0usize; BINS];
@@ -847,9 +850,12 @@ fn build_rec(
             {
                 return node_idx;
             }
+            // Those of the first bins swapped forward, in order; selects,
+            // not a branch, which would be mispredicted about half the time.
             let mut i = 0;
             for j in 0..n {
-                if bin(order[j], axis) < split {
+                if bins(&refs[j])[axis] < split {
+                    refs.swap(i, j);
                     order.swap(i, j);
                     i += 1;
                 }
@@ -866,13 +872,14 @@ fn build_rec(
     };
     nodes[node_idx].count = 0;
     let (left, right) = order.split_at_mut(mid);
+    let (left_refs, right_refs) = refs.split_at_mut(mid);
     let right_idx = if n >= par_min {
         // The first half into `nodes` itself, the second into a vector of
         // its own, appended after it.
         let mut r = Vec::new();
         rayon::join(
-            || build_rec(bounds, centroids, left, start, par_min, nodes),
-            || build_rec(bounds, centroids, right, start + mid, par_min, &mut r),
+            || build_rec(left_refs, left, start, par_min, nodes),
+            || build_rec(right_refs, right, start + mid, par_min, &mut r),
         );
         // Its interior nodes point at their second child by index within
         // `r`: shift them by where it lands.
@@ -885,8 +892,8 @@ fn build_rec(
         }));
         at
     } else {
-        build_rec(bounds, centroids, left, start, par_min, nodes);
-        build_rec(bounds, centroids, right, start + mid, par_min, nodes)
+        build_rec(left_refs, left, start, par_min, nodes);
+        build_rec(right_refs, right, start + mid, par_min, nodes)
     };
     nodes[node_idx].offset = right_idx as u32;
     node_idx
@@ -916,11 +923,10 @@ mod tests {
                 max: c + h,
             });
         }
-        let centroids: Vec<Vec3A> = bounds.iter().map(|b| b.centroid()).collect();
         let build = |par_min: usize| {
             let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
             let mut nodes = Vec::new();
-            build_rec(&bounds, &centroids, &mut order, 0, par_min, &mut nodes);
+            build_rec(&mut bounds.clone(), &mut order, 0, par_min, &mut nodes);
             (nodes, order)
         };
         let (serial, serial_order) = build(usize::MAX);
@@ -1033,7 +1039,7 @@ mod tests {
                 }
             })
             .collect();
-        let (bvh, order) = Bvh::build(&boxes);
+        let (bvh, order) = Bvh::build(boxes.clone());
         // Every primitive is in the order once; leaves start at pack boundaries.
         let mut listed: Vec<u32> = order.iter().flatten().copied().collect();
         listed.sort_unstable();
@@ -1100,7 +1106,7 @@ mod tests {
                 }
             })
             .collect();
-        let (bvh, order) = Bvh::build(&boxes);
+        let (bvh, order) = Bvh::build(boxes.clone());
         assert!(
             bvh.nodes.len() > 1 + WIDTH,
             "the tree should be several levels deep"
