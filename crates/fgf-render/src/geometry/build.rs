@@ -12,6 +12,7 @@ use super::Geometry;
 use crate::error::RenderError;
 use fgf_scene::{GeometryDesc, ShapeDesc};
 use glam::{Affine3A, Mat3, Mat4, Vec2, Vec3A};
+use rayon::prelude::*;
 use std::f32::consts::PI;
 
 /// Faces of a mesh: triangles, or parallelograms given by their corners in
@@ -219,7 +220,7 @@ impl Builder {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn add_mesh<P: Copy + Into<Vec3A>>(
+    fn add_mesh<P: Copy + Into<Vec3A> + Sync>(
         &mut self,
         sid: u32,
         m: &Mat4,
@@ -229,10 +230,15 @@ impl Builder {
         faces: Faces,
         sign: f32,
     ) {
-        let wp: Vec<Vec3A> = pos.iter().map(|&p| m.transform_point3a(p.into())).collect();
+        // (Each element's work on its own, in parallel: the same values in
+        // the same order as one thread's.)
+        let wp: Vec<Vec3A> = pos
+            .par_iter()
+            .map(|&p| m.transform_point3a(p.into()))
+            .collect();
         let nm = Mat3::from_mat4(*m).inverse().transpose();
         let wn: Option<Vec<glam::Vec3>> = normals.map(|ns| {
-            ns.iter()
+            ns.par_iter()
                 .map(|&n| (Vec3A::from(nm * n).normalize_or_zero() * sign).into())
                 .collect()
         });
@@ -257,14 +263,14 @@ impl Builder {
         type Face = (Vec3A, Vec3A, Vec3A, bool, Option<[u32; 3]>, [u32; 3]);
         let corners: Vec<Face> = match faces {
             Faces::Tris(idx) => idx
-                .iter()
+                .par_iter()
                 .map(|t| {
                     let (v0, e1, e2) = face(t[0], t[1], t[2]);
                     (v0, e1, e2, false, Some(*t), *t)
                 })
                 .collect(),
             Faces::Quads(idx) => idx
-                .iter()
+                .par_iter()
                 .map(|q| {
                     let (v0, e1, e2) = face(q[0], q[1], q[3]);
                     (v0, e1, e2, true, None, [q[0], q[1], q[3]])
@@ -344,15 +350,19 @@ impl Builder {
     /// The BVH over every primitive, the primitives stored in its leaf
     /// order (each leaf starting a pack of `bvh::PACK`) and the packs.
     fn finish(self) -> Geometry {
-        let bounds: Vec<Aabb> = self.prims.iter().map(|&p| self.prim_bounds(p)).collect();
+        let bounds: Vec<Aabb> = self
+            .prims
+            .par_iter()
+            .map(|&p| self.prim_bounds(p))
+            .collect();
         let (bvh, order) = Bvh::build(bounds);
         // Store primitives in leaf order so traversal reads them contiguously.
         let prims: Vec<u32> = order
-            .iter()
+            .par_iter()
             .map(|i| i.map_or(PAD, |i| self.prims[i as usize]))
             .collect();
         let (packs, mut pack_other): (Vec<TriPack>, Vec<u8>) = prims
-            .chunks(super::bvh::PACK)
+            .par_chunks(super::bvh::PACK)
             .map(|chunk| TriPack::new(chunk, &self.tris))
             .unzip();
         if pack_other.iter().all(|&o| o == 0) {
