@@ -50,6 +50,31 @@ impl Scalar {
             _ => return None,
         })
     }
+    /// The value of the `self.size()` bytes `raw`, big-endian if `be`.
+    #[inline(always)]
+    fn decode(self, raw: &[u8], be: bool) -> f64 {
+        macro_rules! num {
+            ($t:ty) => {{
+                let b = raw.try_into().unwrap_or_default();
+                (if be {
+                    <$t>::from_be_bytes(b)
+                } else {
+                    <$t>::from_le_bytes(b)
+                }) as f64
+            }};
+        }
+        match self {
+            Scalar::I8 => num!(i8),
+            Scalar::U8 => num!(u8),
+            Scalar::I16 => num!(i16),
+            Scalar::U16 => num!(u16),
+            Scalar::I32 => num!(i32),
+            Scalar::U32 => num!(u32),
+            Scalar::F32 => num!(f32),
+            Scalar::F64 => num!(f64),
+        }
+    }
+
     fn size(self) -> usize {
         match self {
             Scalar::I8 | Scalar::U8 => 1,
@@ -101,6 +126,7 @@ impl Body<'_> {
             .map_err(|_| "non-ASCII data in an ascii PLY body".into())
     }
 
+    #[inline]
     fn read(&mut self, t: Scalar) -> Result<f64, String> {
         if self.fmt == Format::Ascii {
             let tok = self.next_token()?;
@@ -108,26 +134,11 @@ impl Body<'_> {
                 .parse::<f64>()
                 .map_err(|_| format!("cannot parse '{tok}' as a number"));
         }
-        let n = t.size();
-        if self.remaining() < n {
+        let Some(raw) = self.b.get(self.pos..self.pos + t.size()) else {
             return Err("unexpected end of file".into());
-        }
-        let mut raw = [0u8; 8];
-        raw[..n].copy_from_slice(&self.b[self.pos..self.pos + n]);
-        self.pos += n;
-        if self.fmt == Format::Be {
-            raw[..n].reverse();
-        }
-        Ok(match t {
-            Scalar::I8 => raw[0] as i8 as f64,
-            Scalar::U8 => raw[0] as f64,
-            Scalar::I16 => i16::from_le_bytes([raw[0], raw[1]]) as f64,
-            Scalar::U16 => u16::from_le_bytes([raw[0], raw[1]]) as f64,
-            Scalar::I32 => i32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]) as f64,
-            Scalar::U32 => u32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]) as f64,
-            Scalar::F32 => f32::from_le_bytes([raw[0], raw[1], raw[2], raw[3]]) as f64,
-            Scalar::F64 => f64::from_le_bytes(raw),
-        })
+        };
+        self.pos += raw.len();
+        Ok(t.decode(raw, self.fmt == Format::Be))
     }
 
     /// A list length or index: a non-negative integer.
