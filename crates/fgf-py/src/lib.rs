@@ -17,6 +17,11 @@ mod vdb;
 
 pub use errors::{FgfError, ParameterError, SceneError};
 
+/// Large blocks backed by huge pages from their first touch
+/// ([`fgf_render::HugePages`]).
+#[global_allocator]
+static ALLOC: fgf_render::HugePages = fgf_render::HugePages;
+
 #[pymodule]
 fn _core(m: &Bound<'_, PyModule>) -> PyResult<()> {
     let py = m.py();

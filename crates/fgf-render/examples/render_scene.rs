@@ -11,6 +11,11 @@
 
 use std::process::ExitCode;
 
+/// The allocator of the Python package's native module, so that timings
+/// here are those of `fgf render`.
+#[global_allocator]
+static ALLOC: fgf_render::HugePages = fgf_render::HugePages;
+
 fn main() -> ExitCode {
     let args: Vec<String> = std::env::args().collect();
     let usage = "usage: render_scene scene.xml [spp >= 1] [threads, 0 = all] [name=value]...";

@@ -32,6 +32,7 @@ pub mod error;
 pub mod film;
 pub mod geometry;
 mod huge;
+pub use huge::HugePages;
 pub mod integrator;
 mod lanes;
 pub mod math;
