@@ -124,11 +124,75 @@ impl Geometry {
                 !Corners::FLAGS
             )));
         }
+        g.reserve(shapes)?;
         for (si, shape) in shapes.iter().enumerate() {
             validate(shape)?;
             g.add_shape(si as u32, shape);
         }
         Ok(g.finish())
+    }
+}
+
+impl Builder {
+    /// Room for the faces and vertices of all `shapes` at once, or an
+    /// error if there are more primitives than a reference can index or
+    /// the memory cannot be had. (Grown shape by shape, a large mesh's
+    /// arrays were copied whole whenever a later shape overflowed them,
+    /// each copy into new pages.)
+    fn reserve(&mut self, shapes: &[ShapeDesc]) -> Result<(), RenderError> {
+        let (mut faces, mut vertices, mut others) = (0usize, 0usize, 0usize);
+        let (mut normals, mut uvs) = (false, false);
+        for shape in shapes {
+            let (f, v) = match &shape.geometry {
+                GeometryDesc::Mesh(mesh) => {
+                    normals |= mesh.normals.is_some();
+                    uvs |= mesh.texcoords.is_some();
+                    (mesh.indices.len(), mesh.positions.len())
+                }
+                GeometryDesc::Cube | GeometryDesc::Rectangle => {
+                    uvs = true;
+                    let quads = if matches!(shape.geometry, GeometryDesc::Cube) {
+                        6
+                    } else {
+                        1
+                    };
+                    (quads, 4 * quads)
+                }
+                GeometryDesc::Sphere { .. } | GeometryDesc::Disk => {
+                    others += 1;
+                    (0, 0)
+                }
+            };
+            faces = faces.saturating_add(f);
+            vertices = vertices.saturating_add(v);
+        }
+        let prims = faces.saturating_add(others);
+        if prims > INDEX_MASK as usize + 1 {
+            return Err(RenderError::InvalidScene(format!(
+                "{prims} primitives (faces, spheres and disks): at most {} are supported",
+                INDEX_MASK as usize + 1
+            )));
+        }
+        let too_large = |_| {
+            RenderError::InvalidScene(format!(
+                "{faces} faces and {vertices} vertices: not enough memory for the geometry"
+            ))
+        };
+        self.tris.try_reserve_exact(faces).map_err(too_large)?;
+        self.corners.try_reserve_exact(faces).map_err(too_large)?;
+        self.prims.try_reserve_exact(prims).map_err(too_large)?;
+        self.positions
+            .try_reserve_exact(vertices)
+            .map_err(too_large)?;
+        if normals {
+            self.normals
+                .try_reserve_exact(vertices)
+                .map_err(too_large)?;
+        }
+        if uvs {
+            self.uvs.try_reserve_exact(vertices).map_err(too_large)?;
+        }
+        Ok(())
     }
 }
 
@@ -277,6 +341,7 @@ impl Builder {
                 })
                 .collect(),
         };
+        cdf.reserve_exact(corners.len());
         for (v0, e1, e2, quad, tri_idx, verts) in corners {
             let c = e1.cross(e2);
             // Degenerate faces can never be hit and have no area.

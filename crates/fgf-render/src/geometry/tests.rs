@@ -957,3 +957,22 @@ fn hits_read_their_own_mesh_vertex_data() {
     }
     assert!(n_hits > 1000, "{n_hits} hits");
 }
+
+/// A scene with more primitives than a reference can index (here one
+/// mesh of 2^20 faces shared by 1,025 shapes) is refused with an error that
+/// names the count and the limit, before anything is allocated for it.
+#[test]
+fn too_many_primitives_is_an_error() {
+    let mesh = plain_mesh(vec![Vec3::ZERO, Vec3::X, Vec3::Y], vec![[0, 1, 2]; 1 << 20]);
+    let shapes: Vec<ShapeDesc> = (0..1025)
+        .map(|_| plain_shape(GeometryDesc::Mesh(mesh.clone()), Mat4::IDENTITY))
+        .collect();
+    match Geometry::build(&shapes) {
+        Err(crate::RenderError::InvalidScene(m)) => {
+            assert!(m.contains("1074790400 primitives"), "{m}");
+            assert!(m.contains("at most 1073741824"), "{m}");
+        }
+        Err(e) => panic!("unexpected error {e}"),
+        Ok(_) => panic!("a scene of 2^30 + 2^20 faces was accepted"),
+    }
+}
