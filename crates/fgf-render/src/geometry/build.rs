@@ -194,9 +194,7 @@ impl Builder {
         }
         Ok(())
     }
-}
 
-impl Builder {
     /// Add one (validated) shape.
     fn add_shape(&mut self, sid: u32, shape: &ShapeDesc) {
         let m = shape.to_world;
