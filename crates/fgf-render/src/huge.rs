@@ -48,7 +48,7 @@ pub(crate) fn advise<T>(v: &[T]) {
 /// Arrays below this many bytes (64 pages of 4 KiB) are left as they are.
 const MIN_BYTES: usize = 256 * 1024;
 
-/// The system allocator, with every block of at least [`FRESH_MIN`] bytes
+/// The system allocator, with every block of at least 4 MiB (`FRESH_MIN`)
 /// advised for huge pages (`madvise(MADV_HUGEPAGE)`) as it is made, before
 /// anything touches it: its 2 MiB pages are then each faulted in once,
 /// where 4 KiB pages take 512 faults, and a large scene's preparation
