@@ -25,7 +25,6 @@
 pub(crate) fn advise<T>(v: &[T]) {
     #[cfg(target_os = "linux")]
     {
-        const HUGE: usize = 1 << 21;
         let start = v.as_ptr() as usize;
         let bytes = std::mem::size_of_val(v);
         if bytes < MIN_BYTES {
@@ -44,6 +43,11 @@ pub(crate) fn advise<T>(v: &[T]) {
     #[cfg(not(target_os = "linux"))]
     let _ = v;
 }
+
+/// The huge page size the advice assumes: 2 MiB (x86-64, and aarch64
+/// with 4 KiB base pages).
+#[cfg(target_os = "linux")]
+const HUGE: usize = 1 << 21;
 
 /// Arrays below this many bytes (64 pages of 4 KiB) are left as they are.
 const MIN_BYTES: usize = 256 * 1024;
@@ -68,7 +72,6 @@ impl HugePages {
     fn fresh(p: *mut u8, size: usize) {
         #[cfg(target_os = "linux")]
         if !p.is_null() && size >= FRESH_MIN {
-            const HUGE: usize = 1 << 21;
             let start = (p as usize).next_multiple_of(HUGE);
             let end = (p as usize + size) & !(HUGE - 1);
             if end > start {

@@ -149,14 +149,14 @@ impl Builder {
                     uvs |= mesh.texcoords.is_some();
                     (mesh.indices.len(), mesh.positions.len())
                 }
-                GeometryDesc::Cube | GeometryDesc::Rectangle => {
+                // Six faces or one, each four corners with their uvs.
+                GeometryDesc::Cube => {
                     uvs = true;
-                    let quads = if matches!(shape.geometry, GeometryDesc::Cube) {
-                        6
-                    } else {
-                        1
-                    };
-                    (quads, 4 * quads)
+                    (6, 24)
+                }
+                GeometryDesc::Rectangle => {
+                    uvs = true;
+                    (1, 4)
                 }
                 GeometryDesc::Sphere { .. } | GeometryDesc::Disk => {
                     others += 1;

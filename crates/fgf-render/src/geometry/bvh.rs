@@ -850,8 +850,7 @@ fn build_rec(
             {
                 return node_idx;
             }
-            // Those of the first bins swapped forward, in order; selects,
-            // not a branch, which would be mispredicted about half the time.
+            // Those of the first bins swapped forward, in order.
             let mut i = 0;
             for j in 0..n {
                 if bins(&refs[j])[axis] < split {
