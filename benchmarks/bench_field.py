@@ -30,6 +30,7 @@ import json
 import os
 import subprocess
 import sys
+from typing import Any
 
 N = 256
 CASES = {"pink": dict(hurst=-0.1, padding=1.0), "2fbm": dict(hurst=1.5, padding=2.0)}
@@ -105,11 +106,12 @@ print(json.dumps({"best": min(times), "times": times, "maxrss_mib": rss1, "extra
 BASELINE = "import json, resource, numpy, scipy.fft, fgf; print(json.dumps({'maxrss_mib': resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024}))"
 
 
-def child(impl: str, hurst: float, padding: float, repeats: int) -> dict:
+def child(impl: str, hurst: float, padding: float, repeats: int) -> dict[str, Any]:
     out = subprocess.run(
         [sys.executable, "-c", CHILD, impl, str(hurst), str(padding), str(repeats)], check=True, capture_output=True, text=True
     ).stdout
-    return json.loads(out)
+    result: dict[str, Any] = json.loads(out)
+    return result
 
 
 def main() -> int:

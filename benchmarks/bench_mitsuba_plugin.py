@@ -69,7 +69,8 @@ def worker(integrator: str, res: int, spp: int, medium: str) -> None:
 
     scene = mi.load_string(SCENE.format(integrator=integrator, res=res, medium=MEDIA[medium]))
     t0 = time.perf_counter()
-    img = np.array(mi.render(scene, spp=spp, seed=0))
+    # (Mitsuba's stub types the seed as its UInt32; it takes an int.)
+    img = np.array(mi.render(scene, spp=spp, seed=0))  # type: ignore[arg-type]
     dt = time.perf_counter() - t0
     print(json.dumps({"render_s": dt, "mean": float(img[..., :3].mean())}))
 

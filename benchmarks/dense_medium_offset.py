@@ -85,7 +85,7 @@ def run(renderer: str, name: str, seed0: int, k: int, spp: int, opts: dict[str, 
             import fgf
 
             def one(seed: int) -> np.ndarray:
-                return fgf.render(scene, spp=spp, seed=seed, progress=False).mean(axis=(0, 1), dtype=np.float64)
+                return np.asarray(fgf.render(scene, spp=spp, seed=seed, progress=False).mean(axis=(0, 1), dtype=np.float64))
 
         else:
             import mitsuba as mi
@@ -94,7 +94,9 @@ def run(renderer: str, name: str, seed0: int, k: int, spp: int, opts: dict[str, 
             sc = mi.load_file(str(scene))
 
             def one(seed: int) -> np.ndarray:
-                return np.array(mi.render(sc, seed=seed, spp=spp))[..., :3].mean(axis=(0, 1), dtype=np.float64)
+                # (Mitsuba's stub types the seed as its UInt32; it takes an int.)
+                img = np.array(mi.render(sc, seed=seed, spp=spp))  # type: ignore[arg-type]
+                return np.asarray(img[..., :3].mean(axis=(0, 1), dtype=np.float64))
 
         t0, means = time.time(), []
         for i in range(k):
@@ -117,5 +119,11 @@ if __name__ == "__main__":
     if sys.argv[1] == "compare":
         compare(sys.argv[2], sys.argv[3])
     else:
-        opts = dict(re.match(r"([a-z_]+)=(.*)", kv).groups() for kv in sys.argv[6:])  # type: ignore[union-attr]
+        opts = {}
+        for kv in sys.argv[6:]:
+            m = re.match(r"([a-z_]+)=(.*)", kv)
+            if m is None:
+                print(f"dense_medium_offset.py: option {kv!r} is not name=value", file=sys.stderr)
+                sys.exit(2)
+            opts[m[1]] = m[2]
         run(sys.argv[1], sys.argv[2], int(sys.argv[3]), int(sys.argv[4]), int(sys.argv[5]), opts)

@@ -10,7 +10,7 @@ echo "== lint: cargo fmt --check, cargo clippy -D warnings, cargo doc -D warning
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --release -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps -q
-python -m mypy python/fgf
+python -m mypy python/fgf benchmarks
 echo "== cargo test (workspace)"
 cargo test --workspace --exclude fgf-py --release
 echo "== pytest (fast)"
