@@ -41,7 +41,7 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 def _tree_cpu() -> float:
-    import psutil  # type: ignore[import-untyped]
+    import psutil
 
     me = psutil.Process()
     total = 0.0
@@ -60,17 +60,17 @@ def idle_cpu(config: dict[str, Any], seconds: float) -> float:
     import distributed
 
     with dask.config.set(config):
-        cluster = distributed.LocalCluster(  # type: ignore[no-untyped-call]
+        cluster = distributed.LocalCluster(
             n_workers=1, threads_per_worker=1, processes=True, dashboard_address=None, silence_logs=logging.ERROR
         )
-        client = distributed.Client(cluster)  # type: ignore[no-untyped-call]
+        client = distributed.Client(cluster)
     try:
         time.sleep(1.0)
         a = _tree_cpu()
         time.sleep(seconds)
         return (_tree_cpu() - a) / seconds
     finally:
-        client.close()  # type: ignore[no-untyped-call]
+        client.close()
         cluster.close()
 
 
@@ -111,7 +111,7 @@ def main() -> int:
     with cluster.open_client("local:1") as client:
         t0 = time.perf_counter()
         shipped = _ship.ScenePayload.from_file(args.scene, defines)
-        payload = client.scatter(shipped, broadcast=True, hash=False)  # type: ignore[no-untyped-call]
+        payload = client.scatter(shipped, broadcast=True, hash=False)
         t1 = time.perf_counter()
         client.submit(_tasks.render_task, payload, 0, 1, 1, False, pure=False).result()  # compiled once
         t2 = time.perf_counter()
@@ -125,7 +125,7 @@ def main() -> int:
         futures = [client.submit(_tasks.render_task, payload, 1 + i * k, 1 + (i + 1) * k, 1, False, pure=False)
                    for i in range(n)]
         rendering = 0.0
-        for fut in distributed.as_completed(futures):  # type: ignore[no-untyped-call]
+        for fut in distributed.as_completed(futures):
             rendering += fut.result().seconds
             fut.release()
         wall = time.perf_counter() - t0
