@@ -22,6 +22,38 @@ enum Faces<'a> {
     Quads(&'a [[u32; 4]]),
 }
 
+/// Append to `dst` the value `f(v, quad)` of each face of `faces`, made on
+/// the rayon pool and written in face order into `dst`'s spare capacity:
+/// a triangle's `v` its vertex indices, a parallelogram's its first,
+/// second and fourth corners (`quad`).
+fn extend_faces<T: Send>(
+    dst: &mut Vec<T>,
+    faces: &Faces,
+    f: impl Fn([u32; 3], bool) -> T + Sync + Send,
+) {
+    match faces {
+        Faces::Tris(idx) => dst.par_extend(idx.par_iter().map(|t| f(*t, false))),
+        Faces::Quads(idx) => dst.par_extend(idx.par_iter().map(|q| f([q[0], q[1], q[3]], true))),
+    }
+}
+
+/// Whether `c`, the cross product of a face's edges, makes it a face that
+/// can be hit: nonzero and finite.
+fn is_face(c: Vec3A) -> bool {
+    c.length_squared() > 0.0 && c.is_finite()
+}
+
+/// Keep the elements of `v` before `first` and those after where `keep`
+/// (one flag per element from `first` on), in order.
+fn retain_after<T>(v: &mut Vec<T>, first: usize, keep: &[bool]) {
+    let mut i = 0;
+    v.retain(|_| {
+        let k = i < first || keep[i - first];
+        i += 1;
+        k
+    });
+}
+
 /// Give the vertices `base..end` of the geometry, a new mesh's, their
 /// entries in `dst`, one of its per-vertex arrays (normals, uvs): the
 /// mesh's `data` where it has them (as many as it has, up to its vertex
@@ -293,83 +325,73 @@ impl Builder {
         sign: f32,
     ) {
         // (Each element's work on its own, in parallel: the same values in
-        // the same order as one thread's.)
-        let wp: Vec<Vec3A> = pos
-            .par_iter()
-            .map(|&p| m.transform_point3a(p.into()))
-            .collect();
+        // the same order as one thread's.) The vertices join the geometry's
+        // arrays after those of the meshes before, with their normals and
+        // uvs.
+        let base = self.positions.len() as u32;
+        self.positions.par_extend(
+            pos.par_iter()
+                .map(|&p| glam::Vec3::from(m.transform_point3a(p.into()))),
+        );
+        let end = self.positions.len();
+        let wp = &self.positions[base as usize..];
         let nm = Mat3::from_mat4(*m).inverse().transpose();
         let wn: Option<Vec<glam::Vec3>> = normals.map(|ns| {
             ns.par_iter()
                 .map(|&n| (Vec3A::from(nm * n).normalize_or_zero() * sign).into())
                 .collect()
         });
-        // The vertices join the geometry's arrays after those of the
-        // meshes before, with their normals and uvs.
-        let base = self.positions.len() as u32;
-        self.positions
-            .extend(wp.iter().map(|&p| glam::Vec3::from(p)));
-        let end = self.positions.len();
         let n_normals = extend_vertex_data(&mut self.normals, base as usize, end, wn.as_deref());
         let n_uvs = extend_vertex_data(&mut self.uvs, base as usize, end, uvs);
-        let first = self.tris.len() as u32;
-        let mut cdf = Vec::new();
-        let mut total = 0.0f32;
-        // Each face as (v0, edge to u = 1, edge to v = 1, parallelogram?,
-        // its vertex indices if a triangle: they index the vertex normals,
-        // the vertices at v0, v0 + e1, v0 + e2: they index the uvs).
-        let face = |i0: u32, i1: u32, i2: u32| {
-            let v0 = wp[i0 as usize];
-            (v0, wp[i1 as usize] - v0, wp[i2 as usize] - v0)
+        let first = self.tris.len();
+        debug_assert_eq!(first, self.corners.len());
+        // Each face given by its vertices at v0, v0 + e1 (u = 1) and v0 + e2
+        // (v = 1), which index the uvs and, for a triangle, the vertex
+        // normals; `quad`: a parallelogram. The records go straight into
+        // the geometry's (reserved) arrays, made on the rayon pool in face
+        // order, with no intermediate copy: a 4M-triangle mesh's took 320
+        // MB of fresh pages (`docs/benchmarks.md`, "Large meshes at low
+        // sample counts").
+        let edges = |v: [u32; 3]| {
+            let p = |i: u32| Vec3A::from(wp[i as usize]);
+            let v0 = p(v[0]);
+            (v0, p(v[1]) - v0, p(v[2]) - v0)
         };
-        type Face = (Vec3A, Vec3A, Vec3A, bool, Option<[u32; 3]>, [u32; 3]);
-        let corners: Vec<Face> = match faces {
-            Faces::Tris(idx) => idx
-                .par_iter()
-                .map(|t| {
-                    let (v0, e1, e2) = face(t[0], t[1], t[2]);
-                    (v0, e1, e2, false, Some(*t), *t)
-                })
-                .collect(),
-            Faces::Quads(idx) => idx
-                .par_iter()
-                .map(|q| {
-                    let (v0, e1, e2) = face(q[0], q[1], q[3]);
-                    (v0, e1, e2, true, None, [q[0], q[1], q[3]])
-                })
-                .collect(),
-        };
-        cdf.reserve_exact(corners.len());
-        for (v0, e1, e2, quad, tri_idx, verts) in corners {
+        extend_faces(&mut self.tris, &faces, |v, quad| {
+            let (v0, e1, e2) = edges(v);
             let c = e1.cross(e2);
-            // Degenerate faces can never be hit and have no area.
-            if !(c.length_squared() > 0.0) || !c.is_finite() {
-                continue;
-            }
-            // Vertex normals only for triangles (not the parallelograms
-            // of cubes and rectangles), as Mitsuba.
-            let with_normals = tri_idx.is_some_and(|t| t.iter().all(|&i| (i as usize) < n_normals));
-            let with_uvs = verts.iter().all(|&i| (i as usize) < n_uvs);
-            self.corners.push(Corners::new(
-                verts.map(|i| base + i),
-                sid,
-                with_normals,
-                with_uvs,
-                sign < 0.0,
-            ));
-            let tri = Tri {
+            Tri {
                 v0,
                 e1,
                 e2,
-                n: c.normalize() * sign,
+                n: if is_face(c) { c.normalize() * sign } else { c },
                 shape: sid,
                 quad,
-            };
-            total += tri.area();
-            cdf.push(total);
-            self.prims
-                .push((KIND_TRI << KIND_SHIFT) | self.tris.len() as u32);
-            self.tris.push(tri);
+            }
+        });
+        extend_faces(&mut self.corners, &faces, |v, quad| {
+            // Vertex normals only for triangles (not the parallelograms of
+            // cubes and rectangles), as Mitsuba.
+            let with_normals = !quad && v.iter().all(|&i| (i as usize) < n_normals);
+            let with_uvs = v.iter().all(|&i| (i as usize) < n_uvs);
+            Corners::new(v.map(|i| base + i), sid, with_normals, with_uvs, sign < 0.0)
+        });
+        // Degenerate faces can never be hit and have no area: dropped, the
+        // others kept in order.
+        let kept = |t: &Tri| is_face(t.e1.cross(t.e2));
+        if !self.tris[first..].par_iter().all(kept) {
+            let keep: Vec<bool> = self.tris[first..].iter().map(kept).collect();
+            retain_after(&mut self.tris, first, &keep);
+            retain_after(&mut self.corners, first, &keep);
+        }
+        self.prims
+            .extend((first..self.tris.len()).map(|i| (KIND_TRI << KIND_SHIFT) | i as u32));
+        // The running sum of the areas, in face order.
+        let mut cdf: Vec<f32> = self.tris[first..].par_iter().map(Tri::area).collect();
+        let mut total = 0.0f32;
+        for c in &mut cdf {
+            total += *c;
+            *c = total;
         }
         if total > 0.0 {
             for c in &mut cdf {
@@ -377,7 +399,10 @@ impl Builder {
             }
         }
         self.areas.push(total);
-        self.sampling.push(ShapeSampling::Tris { first, cdf });
+        self.sampling.push(ShapeSampling::Tris {
+            first: first as u32,
+            cdf,
+        });
     }
 
     fn prim_bounds(&self, p: u32) -> Aabb {

@@ -1,7 +1,7 @@
 //! Tests of the geometry: the queries against brute force, area sampling.
 
 use super::query::{disk_root, sphere_roots};
-use super::types::Tri;
+use super::types::{Tri, INDEX_MASK, PAD};
 use super::*;
 use crate::ray::Ray;
 use fgf_scene::TriangleMesh;
@@ -975,4 +975,58 @@ fn too_many_primitives_is_an_error() {
         Err(e) => panic!("unexpected error {e}"),
         Ok(_) => panic!("a scene of 2^30 + 2^20 faces was accepted"),
     }
+}
+
+/// Faces with no area (a repeated vertex, collinear vertices) are dropped
+/// from the geometry, the others kept in order with their own vertices and
+/// areas: in a first mesh and in one after it, whose records follow.
+#[test]
+fn degenerate_faces_are_dropped_in_order() {
+    let positions = vec![
+        Vec3::ZERO,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::new(2.0, 0.0, 0.0),
+        Vec3::new(2.0, 3.0, 0.0),
+    ];
+    // Areas 0.5, none, none, 1.5; then none, 3.
+    let first = plain_mesh(
+        positions.clone(),
+        vec![[0, 1, 2], [0, 0, 1], [0, 1, 3], [1, 3, 4]],
+    );
+    let second = plain_mesh(positions, vec![[1, 1, 1], [0, 3, 4]]);
+    let shapes = [
+        plain_shape(GeometryDesc::Mesh(first), Mat4::IDENTITY),
+        plain_shape(GeometryDesc::Mesh(second), Mat4::IDENTITY),
+    ];
+    let g = Geometry::build(&shapes).unwrap();
+    // The second mesh's vertices follow the first's five.
+    let want = [[0, 1, 2], [1, 3, 4], [5, 8, 9]];
+    let got: Vec<[u32; 3]> = g.corners.iter().map(|c| c.v).collect();
+    assert_eq!(got, want);
+    assert_eq!(g.tris.len(), 3);
+    for (t, c) in g.tris.iter().zip(&g.corners) {
+        let p = |i: u32| Vec3A::from(g.positions[i as usize]);
+        assert_eq!(t.v0, p(c.v[0]));
+        assert_eq!(t.v0 + t.e1, p(c.v[1]));
+        assert_eq!(t.v0 + t.e2, p(c.v[2]));
+        assert_eq!(t.n, Vec3A::Z);
+    }
+    assert_eq!(g.areas[..2], [2.0, 3.0]);
+    match (&g.sampling[0], &g.sampling[1]) {
+        (ShapeSampling::Tris { first: 0, cdf: a }, ShapeSampling::Tris { first: 2, cdf: b }) => {
+            assert_eq!(a[..], [0.25, 1.0]);
+            assert_eq!(b[..], [1.0]);
+        }
+        other => panic!("sampling {other:?}"),
+    }
+    // Every primitive reference names a kept triangle, each once.
+    let mut tris: Vec<u32> = g
+        .prims
+        .iter()
+        .filter(|&&p| p != PAD)
+        .map(|&p| p & INDEX_MASK)
+        .collect();
+    tris.sort_unstable();
+    assert_eq!(tris, [0, 1, 2]);
 }
