@@ -229,7 +229,7 @@ impl Bvh {
         let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
         let mut nodes = Vec::with_capacity(2 * bounds.len().max(1));
         if !bounds.is_empty() {
-            build_rec(&mut bounds, &mut order, 0, PAR_MIN, &mut nodes);
+            build_rec(&mut bounds, &mut order, 0, None, PAR_MIN, &mut nodes);
         }
         let padded = pad_leaves(&mut nodes, &order);
         // The tree is chosen on the primitives' own bounds, then every box
@@ -757,6 +757,8 @@ const PAR_MIN: usize = 4096;
 /// order) into `nodes`, in pre-order, and return its root's index; `order`
 /// and `refs` are partitioned in place together, so that every pass over a
 /// node's primitives reads their bounds in sequence, not through `order`.
+/// `bounds`: the union of `refs` and the bounds of their centroids, if the
+/// parent has them (from its bins and its partition), else found here.
 /// The two halves of a subtree of `par_min` primitives or more are built
 /// in parallel, the second into a vector of its own that is then appended:
 /// the same nodes, in the same order, as a build on one thread.
@@ -764,16 +766,20 @@ fn build_rec(
     refs: &mut [Aabb],
     order: &mut [u32],
     start: usize,
+    bounds: Option<(Aabb, Aabb)>,
     par_min: usize,
     nodes: &mut Vec<Node>,
 ) -> usize {
     let node_idx = nodes.len();
-    let mut bb = Aabb::EMPTY;
-    let mut cb = Aabb::EMPTY;
-    for r in refs.iter() {
-        bb = bb.union(*r);
-        cb = cb.grow(r.centroid());
-    }
+    let (bb, cb) = bounds.unwrap_or_else(|| {
+        let mut bb = Aabb::EMPTY;
+        let mut cb = Aabb::EMPTY;
+        for r in refs.iter() {
+            bb = bb.union(*r);
+            cb = cb.grow(r.centroid());
+        }
+        (bb, cb)
+    });
     let n = order.len();
     nodes.push(Node {
         min: bb.min,
@@ -787,18 +793,17 @@ fn build_rec(
     // Choose the axis and bin boundary of least SAH cost.
     let extent = cb.max - cb.min;
     let scale = Vec3A::splat(BINS as f32) / extent;
-    // The bins of a box's centroid along the three axes: one function for
-    // the SAH sweep and the partition, which must agree. (Along an axis
-    // of no extent the bin is meaningless and not used.)
-    let bins = |r: &Aabb| {
-        let x = (r.centroid() - cb.min) * scale;
-        [x.x, x.y, x.z].map(|x| bin_index(x, BINS))
-    };
+    // The bin of a centroid `c` along `axis`: one function for the SAH
+    // sweep and the partition, which must agree. (Along an axis of no
+    // extent the bin is meaningless and not used.)
+    let bin = |c: Vec3A, axis: usize| bin_index((c[axis] - cb.min[axis]) * scale[axis], BINS);
     // All three axes binned in one pass over the boxes.
     let mut bin_bounds = [[Aabb::EMPTY; BINS]; 3];
     let mut bin_count = [[0usize; BINS]; 3];
     for r in refs.iter() {
-        for (axis, b) in bins(r).into_iter().enumerate() {
+        let c = r.centroid();
+        for axis in 0..3 {
+            let b = bin(c, axis);
             bin_count[axis][b] += 1;
             bin_bounds[axis][b] = bin_bounds[axis][b].union(*r);
         }
@@ -839,7 +844,7 @@ fn build_rec(
             }
         }
     }
-    let mid = match best {
+    let (mid, halves) = match best {
         Some((cost, axis, split)) => {
             // Surface-area heuristic in pack units: a leaf costs its packs
             // times SA(node); a split costs one traversal step plus the
@@ -850,25 +855,35 @@ fn build_rec(
             {
                 return node_idx;
             }
-            // Those of the first bins swapped forward, in order.
+            // Those of the first bins swapped forward, in order, and the
+            // bounds of each side's centroids found on the way. The boxes'
+            // unions are those of the bins on either side of the split.
+            let (mut cl, mut cr) = (Aabb::EMPTY, Aabb::EMPTY);
             let mut i = 0;
             for j in 0..n {
-                if bins(&refs[j])[axis] < split {
+                let c = refs[j].centroid();
+                if bin(c, axis) < split {
+                    cl = cl.grow(c);
                     refs.swap(i, j);
                     order.swap(i, j);
                     i += 1;
+                } else {
+                    cr = cr.grow(c);
                 }
             }
-            i
+            let union = |bins: &[Aabb]| bins.iter().fold(Aabb::EMPTY, |a, b| a.union(*b));
+            let (bl, br) = bin_bounds[axis].split_at(split);
+            (i, Some(((union(bl), cl), (union(br), cr))))
         }
         None => {
             // All centroids coincide: split by count so leaves stay small.
             if n <= MAX_LEAF {
                 return node_idx;
             }
-            n / 2
+            (n / 2, None)
         }
     };
+    let (left_bounds, right_bounds) = halves.unzip();
     nodes[node_idx].count = 0;
     let (left, right) = order.split_at_mut(mid);
     let (left_refs, right_refs) = refs.split_at_mut(mid);
@@ -877,8 +892,17 @@ fn build_rec(
         // its own, appended after it.
         let mut r = Vec::new();
         rayon::join(
-            || build_rec(left_refs, left, start, par_min, nodes),
-            || build_rec(right_refs, right, start + mid, par_min, &mut r),
+            || build_rec(left_refs, left, start, left_bounds, par_min, nodes),
+            || {
+                build_rec(
+                    right_refs,
+                    right,
+                    start + mid,
+                    right_bounds,
+                    par_min,
+                    &mut r,
+                )
+            },
         );
         // Its interior nodes point at their second child by index within
         // `r`: shift them by where it lands.
@@ -891,8 +915,8 @@ fn build_rec(
         }));
         at
     } else {
-        build_rec(left_refs, left, start, par_min, nodes);
-        build_rec(right_refs, right, start + mid, par_min, nodes)
+        build_rec(left_refs, left, start, left_bounds, par_min, nodes);
+        build_rec(right_refs, right, start + mid, right_bounds, par_min, nodes)
     };
     nodes[node_idx].offset = right_idx as u32;
     node_idx
@@ -925,7 +949,14 @@ mod tests {
         let build = |par_min: usize| {
             let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
             let mut nodes = Vec::new();
-            build_rec(&mut bounds.clone(), &mut order, 0, par_min, &mut nodes);
+            build_rec(
+                &mut bounds.clone(),
+                &mut order,
+                0,
+                None,
+                par_min,
+                &mut nodes,
+            );
             (nodes, order)
         };
         let (serial, serial_order) = build(usize::MAX);
@@ -935,6 +966,57 @@ mod tests {
             assert!(nodes == serial, "par_min {par_min}: the trees differ");
         }
         assert!(serial.len() > 2 * 40_000 / PACK);
+    }
+
+    /// Every node's box is the union of its primitives' boxes, whether
+    /// the node found it from them or was given it by its parent (from the
+    /// parent's bins), and every leaf holds at most `MAX_LEAF`.
+    #[test]
+    fn node_boxes_are_their_primitives_unions() {
+        let mut s = crate::math::Sampler::new(7, 0, 0);
+        let bounds: Vec<Aabb> = (0..20_000)
+            .map(|i| {
+                let c = if i % 7 == 0 {
+                    Vec3A::new(-0.5, 0.0, 0.5)
+                } else {
+                    Vec3A::new(s.next_1d() - 0.5, s.next_1d() * 0.2, s.next_1d())
+                };
+                let h = Vec3A::new(s.next_1d(), s.next_1d(), s.next_1d()) * 0.02;
+                Aabb {
+                    min: c - h,
+                    max: c + h,
+                }
+            })
+            .collect();
+        let mut order: Vec<u32> = (0..bounds.len() as u32).collect();
+        let mut nodes = Vec::new();
+        build_rec(
+            &mut bounds.clone(),
+            &mut order,
+            0,
+            None,
+            PAR_MIN,
+            &mut nodes,
+        );
+        // The union of the subtree at `i`, checked against its node.
+        fn check(i: usize, nodes: &[Node], order: &[u32], bounds: &[Aabb]) -> Aabb {
+            let node = nodes[i];
+            let union = if node.count > 0 {
+                assert!(node.count as usize <= MAX_LEAF);
+                let prims = &order[node.offset as usize..][..node.count as usize];
+                prims
+                    .iter()
+                    .fold(Aabb::EMPTY, |a, &p| a.union(bounds[p as usize]))
+            } else {
+                let l = check(i + 1, nodes, order, bounds);
+                l.union(check(node.offset as usize, nodes, order, bounds))
+            };
+            assert!(union.min == node.min && union.max == node.max, "node {i}");
+            union
+        }
+        let all = check(0, &nodes, &order, &bounds);
+        assert!(all.max.x > 0.45 && all.min.x < -0.45);
+        assert!(nodes.len() > 2 * bounds.len() / MAX_LEAF);
     }
 
     /// A ray with a zero direction component whose origin lies on one of
