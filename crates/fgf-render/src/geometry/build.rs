@@ -343,8 +343,9 @@ impl Builder {
         faces: Faces,
         sign: f32,
     ) {
-        // (Each element's work on its own, in parallel: the same values in
-        // the same order as one thread's.) The vertices join the geometry's
+        // (Each element's work on its own, on the rayon pool for a large
+        // mesh: the same values in the same order as one thread's.) The
+        // vertices join the geometry's
         // arrays after those of the meshes before, with their normals and
         // uvs.
         let base = self.positions.len() as u32;
@@ -368,10 +369,10 @@ impl Builder {
         // Each face given by its vertices at v0, v0 + e1 (u = 1) and v0 + e2
         // (v = 1), which index the uvs and, for a triangle, the vertex
         // normals; `quad`: a parallelogram. The records go straight into
-        // the geometry's (reserved) arrays, made on the rayon pool in face
-        // order, with no intermediate copy: a 4M-triangle mesh's took 320
-        // MB of fresh pages (`docs/benchmarks.md`, "Large meshes at low
-        // sample counts").
+        // the geometry's (reserved) arrays, in face order, with no
+        // intermediate copy: a 4M-triangle mesh's took 320 MB of fresh
+        // pages (`docs/benchmarks.md`, "Large scenes on a Zen 4 without
+        // AVX-512").
         let edges = |v: [u32; 3]| {
             let p = |i: u32| Vec3A::from(wp[i as usize]);
             let v0 = p(v[0]);
