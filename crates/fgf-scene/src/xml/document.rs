@@ -329,8 +329,8 @@ impl<'a> Positions<'a> {
     }
 }
 
-fn pos_of(doc: &Positions, node: roxmltree::Node) -> (u32, u32) {
-    doc.at(node.range().start)
+fn pos_of(positions: &Positions, node: roxmltree::Node) -> (u32, u32) {
+    positions.at(node.range().start)
 }
 
 impl Builder<'_> {
@@ -408,13 +408,13 @@ impl Builder<'_> {
     /// `<path>`s, includes and objects.
     fn file_body(
         &mut self,
-        doc: &Positions,
+        positions: &Positions,
         root: roxmltree::Node,
         file: &Arc<PathBuf>,
         dir: &Arc<PathBuf>,
         out: &mut Vec<XNode>,
     ) -> Result<(), SceneError> {
-        let (line, col) = pos_of(doc, root);
+        let (line, col) = pos_of(positions, root);
         let here = |tag: Option<String>, msg: String| SceneError {
             kind: SceneErrorKind::Invalid,
             file: file.as_ref().clone(),
@@ -434,7 +434,7 @@ impl Builder<'_> {
         // `<default>` that defines it, as in Mitsuba. The caller's defines win.
         for child in root.children().filter(|n| n.is_element()) {
             if child.tag_name().name() == "default" {
-                let node = self.convert(doc, child, file, dir, 0)?;
+                let node = self.convert(positions, child, file, dir, 0)?;
                 node.check_attrs(&["name", "value"])?;
                 let name = node.req_attr("name")?;
                 let value = node.req_attr("value")?;
@@ -454,7 +454,7 @@ impl Builder<'_> {
         }
         for child in root.children() {
             if child.is_text() && !child.text().unwrap_or("").trim().is_empty() {
-                let (l, c) = pos_of(doc, child);
+                let (l, c) = pos_of(positions, child);
                 return Err(SceneError {
                     kind: SceneErrorKind::Invalid,
                     file: file.as_ref().clone(),
@@ -469,15 +469,15 @@ impl Builder<'_> {
             match child.tag_name().name() {
                 "default" => {}
                 "include" => {
-                    let node = self.convert(doc, child, file, dir, 0)?;
+                    let node = self.convert(positions, child, file, dir, 0)?;
                     self.include(&node, out)?;
                 }
                 "path" => {
-                    let node = self.convert(doc, child, file, dir, 0)?;
+                    let node = self.convert(positions, child, file, dir, 0)?;
                     self.path(&node)?;
                 }
                 _ => {
-                    let node = self.convert(doc, child, file, dir, 0)?;
+                    let node = self.convert(positions, child, file, dir, 0)?;
                     out.push(node);
                 }
             }
@@ -608,13 +608,13 @@ impl Builder<'_> {
     /// Convert an element and its descendants, substituting `$name`s.
     fn convert(
         &mut self,
-        doc: &Positions,
+        positions: &Positions,
         n: roxmltree::Node,
         file: &Arc<PathBuf>,
         dir: &Arc<PathBuf>,
         depth: usize,
     ) -> Result<XNode, SceneError> {
-        let (line, col) = pos_of(doc, n);
+        let (line, col) = pos_of(positions, n);
         self.nodes += 1;
         let mut node = XNode {
             tag: n.tag_name().name().to_string(),
@@ -647,13 +647,13 @@ impl Builder<'_> {
         for c in n.children() {
             if c.is_element() {
                 if matches!(c.tag_name().name(), "default" | "include" | "path") {
-                    let child = self.convert(doc, c, file, dir, depth + 1)?;
+                    let child = self.convert(positions, c, file, dir, depth + 1)?;
                     return Err(child.err(format!(
                         "<{}> is only allowed directly inside <scene>",
                         child.tag
                     )));
                 }
-                let child = self.convert(doc, c, file, dir, depth + 1)?;
+                let child = self.convert(positions, c, file, dir, depth + 1)?;
                 node.children.push(child);
             } else if c.is_text() && !c.text().unwrap_or("").trim().is_empty() {
                 return Err(node.err(format!(
