@@ -4,8 +4,8 @@
 use super::bvh::{Aabb, Bvh};
 use super::pack::TriPack;
 use super::types::{
-    Corners, Disk, ShapeSampling, Sphere, Tri, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE,
-    KIND_TRI, PAD,
+    Corners, Disk, ShapeSampling, Sphere, INDEX_MASK, KIND_DISK, KIND_SHIFT, KIND_SPHERE, KIND_TRI,
+    PAD,
 };
 use super::uv::cube_uv;
 use super::Geometry;
@@ -149,7 +149,6 @@ fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
 /// The primitives of the shapes compiled so far, in shape order.
 #[derive(Default)]
 struct Builder {
-    tris: Vec<Tri>,
     corners: Vec<Corners>,
     positions: Vec<glam::Vec3>,
     normals: Vec<glam::Vec3>,
@@ -229,7 +228,6 @@ impl Builder {
                 "{faces} faces and {vertices} vertices: not enough memory for the geometry"
             ))
         };
-        self.tris.try_reserve_exact(faces).map_err(too_large)?;
         self.corners.try_reserve_exact(faces).map_err(too_large)?;
         self.prims.try_reserve_exact(prims).map_err(too_large)?;
         self.positions
@@ -353,7 +351,6 @@ impl Builder {
             glam::Vec3::from(m.transform_point3a(p.into()))
         });
         let end = self.positions.len();
-        let wp = &self.positions[base as usize..];
         let nm = Mat3::from_mat4(*m).inverse().transpose();
         let wn: Option<Vec<glam::Vec3>> = normals.map(|ns| {
             let mut wn = Vec::with_capacity(ns.len());
@@ -364,58 +361,48 @@ impl Builder {
         });
         let n_normals = extend_vertex_data(&mut self.normals, base as usize, end, wn.as_deref());
         let n_uvs = extend_vertex_data(&mut self.uvs, base as usize, end, uvs);
-        let first = self.tris.len();
-        debug_assert_eq!(first, self.corners.len());
+        let first = self.corners.len();
         // Each face given by its vertices at v0, v0 + e1 (u = 1) and v0 + e2
         // (v = 1), which index the uvs and, for a triangle, the vertex
         // normals; `quad`: a parallelogram. The records go straight into
-        // the geometry's (reserved) arrays, in face order, with no
-        // intermediate copy: a 4M-triangle mesh's took 320 MB of fresh
-        // pages (`docs/benchmarks.md`, "Large scenes on a Zen 4 without
-        // AVX-512").
-        let edges = |v: [u32; 3]| {
-            let p = |i: u32| Vec3A::from(wp[i as usize]);
-            let v0 = p(v[0]);
-            (v0, p(v[1]) - v0, p(v[2]) - v0)
-        };
-        extend_faces(&mut self.tris, &faces, |v, quad| {
-            let (v0, e1, e2) = edges(v);
-            let c = e1.cross(e2);
-            Tri {
-                v0,
-                e1,
-                e2,
-                n: if is_face(c) { c.normalize() * sign } else { c },
-                shape: sid,
-                quad,
-            }
-        });
+        // the geometry's (reserved) array, in face order, with no
+        // intermediate copy, and no `Tri` is kept for them (made from them
+        // where needed, [`Corners::tri`]): a 4M-triangle mesh's took 320 MB
+        // of fresh pages each (`docs/benchmarks.md`, "Large scenes on a
+        // Zen 4 without AVX-512" and "Large meshes without their `Tri`s").
         extend_faces(&mut self.corners, &faces, |v, quad| {
             // Vertex normals only for triangles (not the parallelograms of
             // cubes and rectangles), as Mitsuba.
             let with_normals = !quad && v.iter().all(|&i| (i as usize) < n_normals);
             let with_uvs = v.iter().all(|&i| (i as usize) < n_uvs);
-            Corners::new(v.map(|i| base + i), sid, with_normals, with_uvs, sign < 0.0)
+            let v = v.map(|i| base + i);
+            Corners::new(v, sid, with_normals, with_uvs, sign < 0.0, quad)
         });
         // Degenerate faces can never be hit and have no area: dropped, the
         // others kept in order.
-        let kept = |t: &Tri| is_face(t.e1.cross(t.e2));
-        let new = &self.tris[first..];
+        let positions = &self.positions;
+        let kept = |c: &Corners| {
+            let t = c.tri(positions);
+            is_face(t.e1.cross(t.e2))
+        };
+        let new = &self.corners[first..];
         let all_kept = if new.len() >= PAR_MIN_ITEMS {
             new.par_iter().all(kept)
         } else {
             new.iter().all(kept)
         };
         if !all_kept {
-            let keep: Vec<bool> = self.tris[first..].iter().map(kept).collect();
-            retain_after(&mut self.tris, first, &keep);
+            let keep: Vec<bool> = new.iter().map(kept).collect();
             retain_after(&mut self.corners, first, &keep);
         }
+        let faces_end = self.corners.len();
         self.prims
-            .extend((first..self.tris.len()).map(|i| (KIND_TRI << KIND_SHIFT) | i as u32));
+            .extend((first..faces_end).map(|i| (KIND_TRI << KIND_SHIFT) | i as u32));
         // The running sum of the areas, in face order.
-        let mut cdf = Vec::with_capacity(self.tris.len() - first);
-        extend_mapped(&mut cdf, &self.tris[first..], Tri::area);
+        let mut cdf = Vec::with_capacity(faces_end - first);
+        extend_mapped(&mut cdf, &self.corners[first..], |c| {
+            c.tri(positions).area()
+        });
         let mut total = 0.0f32;
         for c in &mut cdf {
             total += *c;
@@ -437,7 +424,7 @@ impl Builder {
         let i = (p & INDEX_MASK) as usize;
         match p >> KIND_SHIFT {
             KIND_TRI => {
-                let t = &self.tris[i];
+                let t = self.corners[i].tri(&self.positions);
                 let b = Aabb::EMPTY.grow(t.v0).grow(t.v0 + t.e1).grow(t.v0 + t.e2);
                 if t.quad {
                     b.grow(t.v0 + t.e1 + t.e2)
@@ -479,7 +466,7 @@ impl Builder {
             .collect();
         let (packs, mut pack_other): (Vec<TriPack>, Vec<u8>) = prims
             .par_chunks(super::bvh::PACK)
-            .map(|chunk| TriPack::new(chunk, &self.tris))
+            .map(|chunk| TriPack::new(chunk, |i| self.corners[i].tri(&self.positions)))
             .unzip();
         if pack_other.iter().all(|&o| o == 0) {
             pack_other = Vec::new();
@@ -492,10 +479,17 @@ impl Builder {
         crate::huge::advise(&self.normals);
         crate::huge::advise(&self.uvs);
         let lone_pack = bvh.root_leaf().1 > 0 && pack_other.is_empty();
+        let small = self.corners.len() <= Geometry::SMALL;
+        let tris = if small {
+            let tri = |c: &Corners| c.tri(&self.positions);
+            self.corners.iter().map(tri).collect()
+        } else {
+            Vec::new()
+        };
         Geometry {
-            small: self.tris.len() <= Geometry::SMALL,
+            small,
             lone_pack,
-            tris: self.tris,
+            tris,
             corners: self.corners,
             positions: self.positions,
             normals: self.normals,

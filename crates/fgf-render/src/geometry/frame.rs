@@ -36,7 +36,7 @@ impl Geometry {
         let i = (hit.prim & INDEX_MASK) as usize;
         match hit.prim >> KIND_SHIFT {
             KIND_TRI => {
-                let t = &self.tris[i];
+                let t = self.tri(i);
                 let (e1, e2) = (t.e1, t.e2);
                 let Some(uv) = self.corner_uvs(&self.corners[i]) else {
                     return e1;

@@ -47,12 +47,15 @@ use types::{Corners, Disk, ShapeSampling, Sphere, Tri};
 
 /// All surfaces of a scene and their acceleration structure.
 pub struct Geometry {
-    tris: Vec<Tri>,
-    /// Per triangle (as `tris`), its vertices and flags: what hits read.
+    /// The triangles and parallelograms: their vertices and flags.
     corners: Vec<Corners>,
-    /// Few triangles ([`Geometry::SMALL`] or fewer): hits read the `Tri`
-    /// records, which then stay in cache, rather than compute from the
-    /// corners what the records hold (some 40 instructions per hit).
+    /// Their [`Tri`]s (same indices), for a scene of few triangles; empty
+    /// for one of many ([`Geometry::tri`]).
+    tris: Vec<Tri>,
+    /// Few triangles ([`Geometry::SMALL`] or fewer): `tris` holds their
+    /// records, which then stay in cache, and queries read them rather
+    /// than compute from the corners what they hold (some 40 instructions
+    /// per hit).
     small: bool,
     /// The whole scene is one pack of triangles and parallelograms (the
     /// root is a leaf, without spheres or disks): queries test it alone.
@@ -88,14 +91,18 @@ impl Geometry {
     /// of them, a quarter of a 1 MiB L2).
     const SMALL: usize = 256 * 1024 / std::mem::size_of::<Tri>();
 
-    // (The three corners written out: `array::map` is not always inlined.)
-
-    /// The positions of a triangle's corners.
+    /// Triangle `i`'s [`Tri`]: its record in a scene of few triangles,
+    /// else made from its corners, with the same bits ([`Corners::tri`]).
     #[inline(always)]
-    fn corner_positions(&self, c: &Corners) -> [Vec3A; 3] {
-        let p = |k: u32| Vec3A::from(self.positions[k as usize]);
-        [p(c.v[0]), p(c.v[1]), p(c.v[2])]
+    fn tri(&self, i: usize) -> Tri {
+        if self.small {
+            self.tris[i]
+        } else {
+            self.corners[i].tri(&self.positions)
+        }
     }
+
+    // (The three corners written out: `array::map` is not always inlined.)
 
     /// The normals at a triangle's corners, if its mesh has them.
     #[inline(always)]

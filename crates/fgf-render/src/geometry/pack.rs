@@ -35,10 +35,10 @@ pub(super) struct TriPack {
 
 impl TriPack {
     /// The pack of the (up to) 8 primitive references `chunk`: its
-    /// triangles (`tris` indexed by the references) go to the SIMD lanes,
+    /// triangles (`tri` of the references' indices) go to the SIMD lanes,
     /// spheres and disks only to the returned mask of their lanes, padding
     /// is left empty.
-    pub(super) fn new(chunk: &[u32], tris: &[Tri]) -> (TriPack, u8) {
+    pub(super) fn new(chunk: &[u32], tri: impl Fn(usize) -> Tri) -> (TriPack, u8) {
         let mut v0 = [[0f32; PACK]; 3];
         let mut n = [[0f32; PACK]; 3];
         let mut a = [[0f32; PACK]; 3];
@@ -49,7 +49,7 @@ impl TriPack {
                 continue;
             }
             if p >> KIND_SHIFT == KIND_TRI {
-                let t = &tris[(p & INDEX_MASK) as usize];
+                let t = tri((p & INDEX_MASK) as usize);
                 // In f64: a and b divide by |N|², which can be tiny.
                 let (e1, e2) = (t.e1.as_dvec3(), t.e2.as_dvec3());
                 let nn = e1.cross(e2);

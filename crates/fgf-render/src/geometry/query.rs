@@ -9,7 +9,7 @@
 use super::bvh::{Aabb, Beam, BEAM, PACK};
 use super::pack::splat_ray;
 use super::types::{
-    Corners, Disk, Hit, HitRecord, Sphere, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI,
+    Corners, Disk, Hit, HitRecord, Sphere, Tri, INDEX_MASK, KIND_SHIFT, KIND_SPHERE, KIND_TRI,
 };
 use super::Geometry;
 use crate::lanes::{prefetch, F8};
@@ -313,18 +313,7 @@ impl Geometry {
         match prim >> KIND_SHIFT {
             KIND_TRI => {
                 let c = &self.corners[i];
-                let (v0, e1, e2, n) = if self.small {
-                    // A few triangles (their records stay in cache): read.
-                    let tri = &self.tris[i];
-                    (tri.v0, tri.e1, tri.e2, tri.n)
-                } else {
-                    // Many: from the corners, not the (larger) `Tri`, by
-                    // the same operations as the build's: the same bits.
-                    let [v0, a, b] = self.corner_positions(c);
-                    let (e1, e2) = (a - v0, b - v0);
-                    let n = e1.cross(e2).normalize();
-                    (v0, e1, e2, if c.flip() { -n } else { n })
-                };
+                let Tri { v0, e1, e2, n, .. } = self.tri(i);
                 let ns = self.shading_normal(c, [u, v], n);
                 // The hit point from barycentrics is more accurate than o + t d.
                 Hit {
@@ -375,7 +364,7 @@ impl Geometry {
     pub(crate) fn hit_at(&self, ray: &Ray, prim: u32, t: f32) -> Hit {
         let (mut u, mut v) = (0.0, 0.0);
         if prim >> KIND_SHIFT == KIND_TRI {
-            let tri = &self.tris[(prim & INDEX_MASK) as usize];
+            let tri = self.tri((prim & INDEX_MASK) as usize);
             let w = ray.at(t) - tri.v0;
             let (d00, d01, d11) = (tri.e1.dot(tri.e1), tri.e1.dot(tri.e2), tri.e2.dot(tri.e2));
             let (d20, d21) = (w.dot(tri.e1), w.dot(tri.e2));
@@ -404,6 +393,44 @@ impl Geometry {
         t_max: f32,
         mut visit: impl FnMut(u32, u32, f32, Vec3A) -> bool,
     ) -> bool {
+        self.for_each_crossing(
+            ray,
+            t_max,
+            #[inline(always)]
+            |p, t| {
+                let (shape, n) = self.shape_normal(ray, p, t);
+                visit(p, shape, t, n)
+            },
+        )
+    }
+
+    /// The shape and the geometric normal of primitive `p` crossed at `t`
+    /// along `ray`.
+    #[inline(always)]
+    fn shape_normal(&self, ray: &Ray, p: u32, t: f32) -> (u32, Vec3A) {
+        let i = (p & INDEX_MASK) as usize;
+        match p >> KIND_SHIFT {
+            KIND_TRI => {
+                let tri = self.tri(i);
+                (tri.shape, tri.n)
+            }
+            KIND_SPHERE => {
+                let s = &self.spheres[i];
+                (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
+            }
+            _ => (self.disks[i].shape, self.disks[i].n),
+        }
+    }
+
+    /// [`Self::for_each_hit`] with `visit(prim, t)` given only the
+    /// primitive and the distance.
+    #[inline(always)]
+    fn for_each_crossing(
+        &self,
+        ray: &Ray,
+        t_max: f32,
+        mut visit: impl FnMut(u32, f32) -> bool,
+    ) -> bool {
         if self.lone_pack {
             // The walk's visits below, in the same (lane) order.
             let (start, prims) = self.lone_prims();
@@ -416,9 +443,7 @@ impl Geometry {
             while mask != 0 {
                 let l = mask.trailing_zeros() as usize;
                 mask &= mask - 1;
-                let p = prims[l];
-                let tri = &self.tris[(p & INDEX_MASK) as usize];
-                if !visit(p, tri.shape, t[l], tri.n) {
+                if !visit(prims[l], t[l]) {
                     return false;
                 }
             }
@@ -438,16 +463,7 @@ impl Geometry {
                     &mut t,
                     #[inline(always)]
                     |p, t, _, _| {
-                        let i = (p & INDEX_MASK) as usize;
-                        let (shape, n) = match p >> KIND_SHIFT {
-                            KIND_TRI => (self.tris[i].shape, self.tris[i].n),
-                            KIND_SPHERE => {
-                                let s = &self.spheres[i];
-                                (s.shape, (ray.at(t) - s.center).normalize() * s.sign)
-                            }
-                            _ => (self.disks[i].shape, self.disks[i].n),
-                        };
-                        if visit(p, shape, t, n) {
+                        if visit(p, t) {
                             t_max
                         } else {
                             -1.0
@@ -461,12 +477,12 @@ impl Geometry {
     }
 
     /// Whether any surface crosses the segment `o + t d`, `0 < t < t_max`:
-    /// [`Self::for_each_hit`] ended at the first crossing, without reading
-    /// the crossed primitive's record (a shadow ray in a scene where every
-    /// surface blocks).
+    /// the walk of [`Self::for_each_hit`] ended at the first crossing,
+    /// without reading the crossed primitive's record or vertices (a shadow
+    /// ray in a scene where every surface blocks).
     #[inline(always)]
     pub fn occluded(&self, ray: &Ray, t_max: f32) -> bool {
-        !self.for_each_hit(ray, t_max, |_, _, _, _| false)
+        !self.for_each_crossing(ray, t_max, |_, _| false)
     }
 }
 

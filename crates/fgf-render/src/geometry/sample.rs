@@ -44,7 +44,7 @@ impl Geometry {
             ShapeSampling::Tris { first, cdf } => {
                 // Choose a triangle by area, then a uniform point on it.
                 let k = cdf.partition_point(|&c| c <= u_sel).min(cdf.len() - 1);
-                let t = &self.tris[*first as usize + k];
+                let t = self.tri(*first as usize + k);
                 let b = if t.quad {
                     u
                 } else {

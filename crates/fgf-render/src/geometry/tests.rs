@@ -958,6 +958,101 @@ fn hits_read_their_own_mesh_vertex_data() {
     assert!(n_hits > 1000, "{n_hits} hits");
 }
 
+/// A mesh of many triangles keeps no `Tri` records: every query makes
+/// them from the corners. Its hits, crossings, recovered hits, `∂p/∂u`,
+/// samples and area all agree with the triangles computed here from the
+/// mesh's own data (flipped normals included), and a parallelogram keeps
+/// its flag among them.
+#[test]
+fn large_meshes_answer_from_their_corners() {
+    let mesh = height_field(48);
+    let mut field = plain_shape(GeometryDesc::Mesh(mesh.clone()), Mat4::IDENTITY);
+    field.flip_normals = true;
+    // A unit square at y = 1 above the field (which stays below 0.3),
+    // facing up.
+    let rect = plain_shape(
+        GeometryDesc::Rectangle,
+        Mat4::from_translation(Vec3::new(2.0, 1.0, 2.0))
+            * Mat4::from_rotation_x(-std::f32::consts::FRAC_PI_2)
+            * Mat4::from_scale(Vec3::splat(0.5)),
+    );
+    let g = Geometry::build(&[field, rect]).unwrap();
+    assert!(mesh.indices.len() > Geometry::SMALL);
+    assert!(!g.small && g.tris.is_empty());
+    let last = g.corners.len() - 1;
+    assert!(g.corners[last].quad() && !g.corners[..last].iter().any(|c| c.quad()));
+    // The mesh's triangle `i`: corners, and its flipped unit normal.
+    let corners = |i: usize| mesh.indices[i].map(|k| Vec3A::from(mesh.positions[k as usize]));
+    let normal = |i: usize| {
+        let [a, b, c] = corners(i);
+        -(b - a).cross(c - a).normalize()
+    };
+    let close = |a: Vec3A, b: Vec3A| (a - b).length() < 1e-5;
+    let area: f64 = (0..mesh.indices.len())
+        .map(|i| {
+            let [a, b, c] = corners(i).map(|p| p.as_dvec3());
+            0.5 * (b - a).cross(c - a).length()
+        })
+        .sum();
+    assert!(
+        (f64::from(g.areas[0]) - area).abs() < 1e-5 * area,
+        "{} vs {area}",
+        g.areas[0]
+    );
+    assert!((g.areas[1] - 1.0).abs() < 1e-6, "{}", g.areas[1]);
+    let mut s = crate::math::Sampler::new(31, 0, 0);
+    let (mut n_hits, mut n_rect) = (0, 0);
+    for _ in 0..2000 {
+        let o = Vec3A::new(4.0 * s.next_1d(), 2.0, 4.0 * s.next_1d());
+        let d = (Vec3A::new(4.0 * s.next_1d(), -1.0, 4.0 * s.next_1d()) - o).normalize();
+        let ray = Ray { o, d };
+        let hit = g.intersect(&ray, f32::INFINITY);
+        let mut crossings = 0;
+        let open = g.for_each_hit(&ray, f32::INFINITY, |p, shape, t, n| {
+            crossings += 1;
+            let i = (p & INDEX_MASK) as usize;
+            if shape == 0 {
+                assert!(close(n, normal(i)), "crossing {i}: {n}");
+                assert!(close(ray.at(t), g.hit_at(&ray, p, t).p));
+            }
+            true
+        });
+        assert!(open);
+        assert_eq!(g.occluded(&ray, f32::INFINITY), crossings > 0);
+        // Where the ray crosses y = 1: in the square or not.
+        let q = ray.at((1.0 - o.y) / d.y);
+        let in_square = (q.x - 2.0).abs() < 0.5 && (q.z - 2.0).abs() < 0.5;
+        let Some(h) = hit else {
+            panic!("a ray down onto the field hits nothing")
+        };
+        assert_eq!(h.shape == 1, in_square, "{q}");
+        if h.shape == 1 {
+            n_rect += 1;
+            assert!(close(h.n, Vec3A::Y) && close(h.p, q), "{} at {}", h.n, h.p);
+            continue;
+        }
+        n_hits += 1;
+        let i = (h.prim & INDEX_MASK) as usize;
+        let [a, b, c] = corners(i);
+        let [u, v] = h.bary;
+        assert!(close(h.p, a + u * (b - a) + v * (c - a)));
+        assert!(close(h.n, normal(i)) && close(h.ns, h.n));
+        assert!(close(g.dp_du(&h), b - a));
+        let again = g.hit_at(&ray, h.prim, h.t);
+        assert!((again.bary[0] - u).abs() < 1e-3 && (again.bary[1] - v).abs() < 1e-3);
+        let ps = g.sample_shape_hit(0, s.next_1d(), s.next_2d());
+        let i = (ps.prim & INDEX_MASK) as usize;
+        let [a, b, c] = corners(i);
+        let [u, v] = ps.bary;
+        assert!(u >= 0.0 && v >= 0.0 && u + v <= 1.0);
+        assert!(close(ps.p, a + u * (b - a) + v * (c - a)) && close(ps.n, normal(i)));
+    }
+    assert!(
+        n_hits > 1000 && n_rect > 10,
+        "{n_hits} mesh hits, {n_rect} rectangle hits"
+    );
+}
+
 /// A scene with more primitives than a reference can index (here one
 /// mesh of 2^20 faces shared by 1,025 shapes) is refused with an error that
 /// names the count and the limit, before anything is allocated for it.

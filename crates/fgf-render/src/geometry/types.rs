@@ -41,14 +41,18 @@ pub(super) struct Tri {
     pub(super) quad: bool,
 }
 
-/// What a hit on a triangle reads ([`super::Geometry::make_hit`],
-/// [`super::Geometry::uv`]), in 16 bytes: the indices of the vertices at
-/// `v0`, `v0 + e1`, `v0 + e2` into the geometry's vertex arrays (which it
-/// shares with its neighbours), its shape and three flags. The 80-byte
-/// [`Tri`]s, plus per-triangle copies of the vertex normals and texture
-/// coordinates, made some 140 bytes per triangle that every hit read:
-/// on a 120,000-triangle mesh about 17 MB, beyond what this kind of
-/// machine keeps in its last-level cache (`docs/benchmarks.md`).
+/// A triangle or parallelogram as the geometry keeps it
+/// ([`super::Geometry::make_hit`], [`super::Geometry::uv`]), in 16 bytes:
+/// the indices of the vertices at `v0`, `v0 + e1`, `v0 + e2` into the
+/// geometry's vertex arrays (which it shares with its neighbours), its
+/// shape and four flags. Its [`Tri`] is made from them
+/// ([`Corners::tri`]) wherever it is needed, and kept only for scenes of
+/// few triangles. The 80-byte [`Tri`]s, plus per-triangle copies of the
+/// vertex normals and texture coordinates, made some 140 bytes per
+/// triangle that every hit read: on a 120,000-triangle mesh about 17 MB,
+/// beyond what this kind of machine keeps in its last-level cache; on a
+/// 4M-triangle mesh the `Tri`s alone took 320 MB of fresh pages
+/// (`docs/benchmarks.md`).
 #[derive(Debug, Clone, Copy)]
 pub(super) struct Corners {
     pub(super) v: [u32; 3],
@@ -58,7 +62,8 @@ pub(super) struct Corners {
 
 impl Corners {
     /// The bits of `shape_flags` that hold flags; shapes are fewer.
-    pub(super) const FLAGS: u32 = 0b111 << 29;
+    pub(super) const FLAGS: u32 = 0b1111 << 28;
+    const QUAD: u32 = 1 << 28;
     const NORMALS: u32 = 1 << 29;
     const UVS: u32 = 1 << 30;
     const FLIP: u32 = 1 << 31;
@@ -66,8 +71,16 @@ impl Corners {
     /// `normals`: the vertices have normals; `uvs`: texture coordinates
     /// (without them, the barycentrics are the texture coordinates, as for
     /// Mitsuba's meshes without any); `flip`: the geometric normal is
-    /// `-(e1 × e2)` normalised rather than `e1 × e2`.
-    pub(super) fn new(v: [u32; 3], shape: u32, normals: bool, uvs: bool, flip: bool) -> Self {
+    /// `-(e1 × e2)` normalised rather than `e1 × e2`; `quad`: a
+    /// parallelogram.
+    pub(super) fn new(
+        v: [u32; 3],
+        shape: u32,
+        normals: bool,
+        uvs: bool,
+        flip: bool,
+        quad: bool,
+    ) -> Self {
         debug_assert!(shape & Self::FLAGS == 0);
         let flag = |b: bool, f: u32| if b { f } else { 0 };
         Corners {
@@ -75,7 +88,28 @@ impl Corners {
             shape_flags: shape
                 | flag(normals, Self::NORMALS)
                 | flag(uvs, Self::UVS)
-                | flag(flip, Self::FLIP),
+                | flag(flip, Self::FLIP)
+                | flag(quad, Self::QUAD),
+        }
+    }
+    /// The face's [`Tri`], its corners at `positions` (the geometry's
+    /// vertices). Every `Tri` is made by these operations, so a `Tri` made
+    /// again has the same bits as one made before. The normal of a
+    /// degenerate face (`e1 × e2` zero, which the geometry drops) is NaN.
+    #[inline(always)]
+    pub(super) fn tri(&self, positions: &[glam::Vec3]) -> Tri {
+        // (The three corners written out: `array::map` is not always inlined.)
+        let p = |k: u32| Vec3A::from(positions[k as usize]);
+        let v0 = p(self.v[0]);
+        let (e1, e2) = (p(self.v[1]) - v0, p(self.v[2]) - v0);
+        let n = e1.cross(e2).normalize();
+        Tri {
+            v0,
+            e1,
+            e2,
+            n: if self.flip() { -n } else { n },
+            shape: self.shape(),
+            quad: self.quad(),
         }
     }
     #[inline(always)]
@@ -93,6 +127,10 @@ impl Corners {
     #[inline(always)]
     pub(super) fn flip(&self) -> bool {
         self.shape_flags & Self::FLIP != 0
+    }
+    #[inline(always)]
+    pub(super) fn quad(&self) -> bool {
+        self.shape_flags & Self::QUAD != 0
     }
 }
 
