@@ -32,6 +32,14 @@ pub fn check_regular(path: &Path) -> std::io::Result<std::fs::Metadata> {
     Err(std::io::Error::new(std::io::ErrorKind::InvalidInput, what))
 }
 
+/// A regular file (see [`check_regular`]) opened for reading, and its size.
+pub fn open_regular(path: &Path) -> std::io::Result<(std::fs::File, u64)> {
+    check_regular(path)?;
+    let file = std::fs::File::open(path)?;
+    let len = file.metadata()?.len();
+    Ok((file, len))
+}
+
 /// [`std::fs::read`] of a regular file only (see [`check_regular`]).
 pub fn read_regular(path: &Path) -> std::io::Result<Vec<u8>> {
     check_regular(path)?;

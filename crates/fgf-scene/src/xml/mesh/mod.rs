@@ -43,13 +43,26 @@ use crate::validate::{mesh_problem, MeshProblem};
 use glam::{Mat3, Mat4, Vec2, Vec3};
 use std::path::Path;
 
+/// The error of a `what` file (`PLY`, `OBJ`...) at `path` that cannot be
+/// opened or read.
+fn io_error(fnode: &XNode, path: &Path, what: &str, e: std::io::Error) -> SceneError {
+    fnode.err_kind(
+        SceneErrorKind::Io,
+        format!("cannot read {what} file '{}': {e}", path.display()),
+    )
+}
+
 pub(super) fn read_file(fnode: &XNode, path: &Path, what: &str) -> Result<Vec<u8>, SceneError> {
-    fgf_io::read_regular(path).map_err(|e| {
-        fnode.err_kind(
-            SceneErrorKind::Io,
-            format!("cannot read {what} file '{}': {e}", path.display()),
-        )
-    })
+    fgf_io::read_regular(path).map_err(|e| io_error(fnode, path, what, e))
+}
+
+/// The regular file at `path`, opened, and its size.
+pub(super) fn open_file(
+    fnode: &XNode,
+    path: &Path,
+    what: &str,
+) -> Result<(std::fs::File, u64), SceneError> {
+    fgf_io::open_regular(path).map_err(|e| io_error(fnode, path, what, e))
 }
 
 /// Check and normalise a mesh (by the rules of [`mesh_problem`]); `Err` is

@@ -1,15 +1,19 @@
-//! PLY meshes: our own reader (see the parent module for why).
+//! PLY meshes: our own reader (see the parent module for why). The file is
+//! read a buffer at a time, never whole: a 4M-triangle mesh's PLY is 116 MB,
+//! which took as many fresh pages and a copy (`docs/benchmarks.md`, "Large
+//! meshes without their `Tri`s").
 
-use super::{finish, read_file};
+use super::{finish, open_file};
 use crate::desc::TriangleMesh;
 use crate::error::{SceneError, SceneErrorKind};
 use crate::xml::document::XNode;
 use glam::{Vec2, Vec3};
+use std::io::Read;
 use std::path::Path;
 
 pub(crate) fn load_ply(fnode: &XNode, path: &Path) -> Result<TriangleMesh, SceneError> {
-    let bytes = read_file(fnode, path, "PLY")?;
-    parse_ply(&bytes).map_err(|m| {
+    let (file, len) = open_file(fnode, path, "PLY")?;
+    parse_ply(file, len).map_err(|m| {
         fnode.err_kind(
             SceneErrorKind::Format,
             format!("invalid PLY file '{}': {m}", path.display()),
@@ -99,30 +103,105 @@ struct Element {
     props: Vec<Prop>,
 }
 
-/// Reads values from the body of a PLY file.
-struct Body<'a> {
+/// The bytes [`Body`] holds at most: the longest header read (64 KiB) and
+/// more, so that a refill is rare.
+const CHUNK: usize = 1 << 20;
+
+/// Reads a PLY file `src`, a buffer of [`CHUNK`] bytes at a time: its
+/// header, then values from its body.
+struct Body<R> {
     fmt: Format,
-    b: &'a [u8],
-    pos: usize,
+    src: R,
+    buf: Vec<u8>,
+    /// The bytes `buf[lo..hi]` are read from `src` and not yet used.
+    lo: usize,
+    hi: usize,
+    /// The bytes of the file not yet read from `src`, by its size when
+    /// opened (what bounds the counts of a hostile header).
+    unread: u64,
 }
 
-impl Body<'_> {
+impl<R: Read> Body<R> {
+    /// A reader of `src`, a file of `len` bytes.
+    fn new(src: R, len: u64) -> Self {
+        Body {
+            fmt: Format::Ascii,
+            src,
+            buf: vec![0; CHUNK],
+            lo: 0,
+            hi: 0,
+            unread: len,
+        }
+    }
+
     fn remaining(&self) -> usize {
-        self.b.len() - self.pos
+        let unread = usize::try_from(self.unread).unwrap_or(usize::MAX);
+        (self.hi - self.lo).saturating_add(unread)
+    }
+
+    /// Have at least `n` (at most [`CHUNK`]) bytes at `buf[lo..]`, or all
+    /// the file has left if fewer: whether there are `n`.
+    #[inline(never)]
+    fn fill(&mut self, n: usize) -> Result<bool, String> {
+        debug_assert!(n <= CHUNK);
+        self.buf.copy_within(self.lo..self.hi, 0);
+        self.hi -= self.lo;
+        self.lo = 0;
+        while self.hi < n {
+            let got = match self.src.read(&mut self.buf[self.hi..]) {
+                Ok(0) => return Ok(false),
+                Ok(got) => got,
+                Err(e) if e.kind() == std::io::ErrorKind::Interrupted => continue,
+                Err(e) => return Err(format!("read error: {e}")),
+            };
+            self.hi += got;
+            self.unread = self.unread.saturating_sub(got as u64);
+        }
+        Ok(true)
+    }
+
+    /// Read the header (which must end within the first 64 KiB) and stand
+    /// at the start of the body.
+    fn header(&mut self) -> Result<Vec<Element>, String> {
+        self.fill(1 << 16)?;
+        let (fmt, elements, body) = parse_header(&self.buf[..self.hi])?;
+        self.fmt = fmt;
+        self.lo = body;
+        Ok(elements)
     }
 
     fn next_token(&mut self) -> Result<&str, String> {
-        while self.pos < self.b.len() && self.b[self.pos].is_ascii_whitespace() {
-            self.pos += 1;
+        loop {
+            while self.lo < self.hi && self.buf[self.lo].is_ascii_whitespace() {
+                self.lo += 1;
+            }
+            if self.lo < self.hi || !self.fill(1)? {
+                break;
+            }
         }
-        let start = self.pos;
-        while self.pos < self.b.len() && !self.b[self.pos].is_ascii_whitespace() {
-            self.pos += 1;
+        // The token's length so far: it may run on past the buffer.
+        let mut len = 0;
+        loop {
+            while self.lo + len < self.hi && !self.buf[self.lo + len].is_ascii_whitespace() {
+                len += 1;
+            }
+            if self.lo + len < self.hi {
+                break;
+            }
+            if len == CHUNK {
+                return Err(format!("a token longer than {CHUNK} bytes"));
+            }
+            if !self.fill(len + 1)? {
+                // The token ends with the file.
+                break;
+            }
         }
-        if start == self.pos {
+        if len == 0 {
             return Err("unexpected end of file".into());
         }
-        std::str::from_utf8(&self.b[start..self.pos])
+        let start = self.lo;
+        self.lo += len;
+        std::str::from_utf8(&self.buf[start..start + len])
             .map_err(|_| "non-ASCII data in an ascii PLY body".into())
     }
 
@@ -134,10 +213,12 @@ impl Body<'_> {
                 .parse::<f64>()
                 .map_err(|_| format!("cannot parse '{tok}' as a number"));
         }
-        let Some(raw) = self.b.get(self.pos..self.pos + t.size()) else {
+        let size = t.size();
+        if self.hi - self.lo < size && !self.fill(size)? {
             return Err("unexpected end of file".into());
-        };
-        self.pos += raw.len();
+        }
+        let raw = &self.buf[self.lo..self.lo + size];
+        self.lo += size;
         Ok(t.decode(raw, self.fmt == Format::Be))
     }
 
@@ -246,13 +327,10 @@ fn parse_header(b: &[u8]) -> Result<(Format, Vec<Element>, usize), String> {
     Ok((fmt, elements, body))
 }
 
-fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
-    let (fmt, elements, body_start) = parse_header(b)?;
-    let mut body = Body {
-        fmt,
-        b,
-        pos: body_start,
-    };
+/// The mesh of the PLY file `src` of `len` bytes.
+fn parse_ply(src: impl Read, len: u64) -> Result<TriangleMesh, String> {
+    let mut body = Body::new(src, len);
+    let elements = body.header()?;
     let mut positions: Option<Vec<Vec3>> = None;
     let mut normals: Option<Vec<Vec3>> = None;
     let mut texcoords: Option<Vec<Vec2>> = None;
@@ -399,11 +477,117 @@ fn parse_ply(b: &[u8]) -> Result<TriangleMesh, String> {
 mod tests {
     use super::*;
 
+    /// The mesh of the PLY file `b`.
+    fn parse(b: &[u8]) -> Result<TriangleMesh, String> {
+        parse_ply(b, b.len() as u64)
+    }
+
+    /// A reader that gives at most `step` bytes a call (as a pipe or a
+    /// slow disk may): values and tokens straddle every refill.
+    struct Trickle<'a> {
+        b: &'a [u8],
+        step: usize,
+    }
+
+    impl Read for Trickle<'_> {
+        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+            let n = self.step.min(out.len()).min(self.b.len());
+            out[..n].copy_from_slice(&self.b[..n]);
+            self.b = &self.b[n..];
+            Ok(n)
+        }
+    }
+
+    /// A binary grid of `k` × `k` vertices (`z` the vertex's number, `u`
+    /// its row) and its quads as triangles, large enough to take several
+    /// buffers, read in big pieces and in pieces of a few bytes: every
+    /// value as written.
+    #[test]
+    fn large_files_are_read_a_buffer_at_a_time() {
+        let k = 300u32;
+        let mut b = format!(
+            "ply\nformat binary_little_endian 1.0\nelement vertex {}\nproperty float x\nproperty float y\nproperty double z\nproperty float u\nproperty float v\nelement face {}\nproperty uchar flags\nproperty list uchar int vertex_indices\nend_header\n",
+            k * k,
+            (k - 1) * (k - 1)
+        )
+        .into_bytes();
+        for i in 0..k * k {
+            for v in [(i % k) as f32, (i / k) as f32] {
+                b.extend(v.to_le_bytes());
+            }
+            b.extend(f64::from(i).to_le_bytes());
+            for v in [(i / k) as f32, 0.5] {
+                b.extend(v.to_le_bytes());
+            }
+        }
+        for r in 0..k - 1 {
+            for c in 0..k - 1 {
+                let v = r * k + c;
+                b.extend([7, 4]);
+                for i in [v, v + 1, v + k + 1, v + k] {
+                    b.extend(i.to_le_bytes());
+                }
+            }
+        }
+        assert!(b.len() > 3 * CHUNK);
+        let len = b.len() as u64;
+        for step in [usize::MAX, 5] {
+            let m = parse_ply(Trickle { b: &b, step }, len).unwrap();
+            assert_eq!(m.positions.len(), (k * k) as usize);
+            for (i, p) in m.positions.iter().enumerate() {
+                let i = i as u32;
+                assert_eq!(*p, Vec3::new((i % k) as f32, (i / k) as f32, i as f32));
+            }
+            let t = m.texcoords.expect("texture coordinates");
+            assert!(t
+                .iter()
+                .enumerate()
+                .all(|(i, t)| *t == Vec2::new((i as u32 / k) as f32, 0.5)));
+            assert_eq!(m.indices.len(), 2 * ((k - 1) * (k - 1)) as usize);
+            let (r, c) = (k - 2, k - 2);
+            let v = r * k + c;
+            assert_eq!(
+                m.indices[m.indices.len() - 2..],
+                [[v, v + 1, v + k + 1], [v, v + k + 1, v + k]]
+            );
+        }
+        // The same file cut short, read either way.
+        let cut = &b[..b.len() - 3];
+        for step in [usize::MAX, 5] {
+            let e = parse_ply(Trickle { b: cut, step }, len).unwrap_err();
+            assert!(e.contains("end of file"), "{e}");
+        }
+    }
+
+    /// An ascii file read a few bytes at a time: tokens cut anywhere.
+    #[test]
+    fn ascii_tokens_across_refills() {
+        let b = SQUARE_ASCII.replace("1 1 0", "1.000 1e0   0.0");
+        for step in 1..8 {
+            let m = parse_ply(
+                Trickle {
+                    b: b.as_bytes(),
+                    step,
+                },
+                b.len() as u64,
+            )
+            .unwrap();
+            assert_eq!(m.positions[2], Vec3::new(1.0, 1.0, 0.0), "step {step}");
+            assert_eq!(m.indices, vec![[0, 1, 2], [0, 2, 3]]);
+        }
+        let no_newline = b.trim_end();
+        assert_eq!(parse(no_newline.as_bytes()).unwrap().indices.len(), 2);
+        let truncated = &b[..b.len() - 3];
+        assert!(parse(truncated.as_bytes())
+            .unwrap_err()
+            .contains("end of file"));
+    }
+
     const SQUARE_ASCII: &str = "ply\nformat ascii 1.0\ncomment a unit square\nelement vertex 4\nproperty float x\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n1 1 0\n0 1 0\n4 0 1 2 3\n";
 
     #[test]
     fn ascii_quad_is_fan_triangulated() {
-        let m = parse_ply(SQUARE_ASCII.as_bytes()).unwrap();
+        let m = parse(SQUARE_ASCII.as_bytes()).unwrap();
         assert_eq!(m.positions.len(), 4);
         assert_eq!(m.indices, vec![[0, 1, 2], [0, 2, 3]]);
         assert!(m.normals.is_none());
@@ -436,7 +620,7 @@ mod tests {
     #[test]
     fn binary_both_endians_read_positions_and_unit_normals() {
         for be in [false, true] {
-            let m = parse_ply(&binary(be)).unwrap();
+            let m = parse(&binary(be)).unwrap();
             assert_eq!(m.positions[1], Vec3::new(2.0, 0.0, 0.0));
             assert_eq!(m.positions[2], Vec3::new(0.0, 3.0, 0.0));
             assert_eq!(m.normals.as_ref().unwrap()[0], Vec3::Z);
@@ -451,29 +635,24 @@ mod tests {
             let ply = format!(
                 "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\nproperty float {a}\nproperty float {b}\nelement face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0 0.1 0.2\n1 0 0 0.9 0.3\n0 1 0 0.2 0.7\n3 0 1 2\n"
             );
-            let m = parse_ply(ply.as_bytes()).unwrap();
+            let m = parse(ply.as_bytes()).unwrap();
             let t = m.texcoords.expect("texture coordinates");
             assert_eq!(t[1], Vec2::new(0.9, 0.3), "{a}, {b}");
         }
-        assert!(parse_ply(SQUARE_ASCII.as_bytes())
-            .unwrap()
-            .texcoords
-            .is_none());
+        assert!(parse(SQUARE_ASCII.as_bytes()).unwrap().texcoords.is_none());
     }
 
     #[test]
     fn hostile_counts_and_truncation_are_errors() {
         let huge = SQUARE_ASCII.replace("element vertex 4", "element vertex 4000000000000");
-        assert!(parse_ply(huge.as_bytes())
+        assert!(parse(huge.as_bytes())
             .unwrap_err()
             .contains("more than the file"));
         let mut b = binary(false);
         b.truncate(b.len() - 2);
-        assert!(parse_ply(&b).unwrap_err().contains("end of file"));
+        assert!(parse(&b).unwrap_err().contains("end of file"));
         let bad = SQUARE_ASCII.replace("4 0 1 2 3", "4 0 1 2 9");
-        assert!(parse_ply(bad.as_bytes())
-            .unwrap_err()
-            .contains("out of range"));
-        assert!(parse_ply(b"not a ply").is_err());
+        assert!(parse(bad.as_bytes()).unwrap_err().contains("out of range"));
+        assert!(parse(b"not a ply").is_err());
     }
 }
