@@ -382,8 +382,8 @@ impl Builder {
         // others kept in order.
         let positions = &self.positions;
         let kept = |c: &Corners| {
-            let t = c.tri(positions);
-            is_face(t.e1.cross(t.e2))
+            let (_, e1, e2) = c.edges(positions);
+            is_face(e1.cross(e2))
         };
         let new = &self.corners[first..];
         let all_kept = if new.len() >= PAR_MIN_ITEMS {
@@ -424,10 +424,11 @@ impl Builder {
         let i = (p & INDEX_MASK) as usize;
         match p >> KIND_SHIFT {
             KIND_TRI => {
-                let t = self.corners[i].tri(&self.positions);
-                let b = Aabb::EMPTY.grow(t.v0).grow(t.v0 + t.e1).grow(t.v0 + t.e2);
-                if t.quad {
-                    b.grow(t.v0 + t.e1 + t.e2)
+                let c = &self.corners[i];
+                let (v0, e1, e2) = c.edges(&self.positions);
+                let b = Aabb::EMPTY.grow(v0).grow(v0 + e1).grow(v0 + e2);
+                if c.quad() {
+                    b.grow(v0 + e1 + e2)
                 } else {
                     b
                 }

@@ -98,10 +98,7 @@ impl Corners {
     /// degenerate face (`e1 × e2` zero, which the geometry drops) is NaN.
     #[inline(always)]
     pub(super) fn tri(&self, positions: &[glam::Vec3]) -> Tri {
-        // (The three corners written out: `array::map` is not always inlined.)
-        let p = |k: u32| Vec3A::from(positions[k as usize]);
-        let v0 = p(self.v[0]);
-        let (e1, e2) = (p(self.v[1]) - v0, p(self.v[2]) - v0);
+        let (v0, e1, e2) = self.edges(positions);
         let n = e1.cross(e2).normalize();
         Tri {
             v0,
@@ -111,6 +108,14 @@ impl Corners {
             shape: self.shape(),
             quad: self.quad(),
         }
+    }
+    /// The face's `v0`, `e1` and `e2` (of [`Corners::tri`]).
+    #[inline(always)]
+    pub(super) fn edges(&self, positions: &[glam::Vec3]) -> (Vec3A, Vec3A, Vec3A) {
+        // (The three corners written out: `array::map` is not always inlined.)
+        let p = |k: u32| Vec3A::from(positions[k as usize]);
+        let v0 = p(self.v[0]);
+        (v0, p(self.v[1]) - v0, p(self.v[2]) - v0)
     }
     #[inline(always)]
     pub(super) fn shape(&self) -> u32 {
