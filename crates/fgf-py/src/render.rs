@@ -124,8 +124,10 @@ fn render_scene<'py>(
     let total_spp = spp.unwrap_or(desc.sensor.spp) as u64;
     let total = desc.sensor.width as u64 * desc.sensor.height as u64 * total_spp;
     let source = scene.display().to_string();
+    // The scene is given up to the render, which lets go of its meshes'
+    // own arrays once they are compiled.
     let job = run_job(py, total, "render", progress.as_ref(), |counter| {
-        in_pool(threads, || fgf_render::render(&desc, &opts, counter))
+        in_pool(threads, || fgf_render::render_owned(desc, &opts, counter))
     })?;
     // A cancelled render still returns the image of the passes finished.
     let (out, cancelled) = match job.value {
@@ -184,7 +186,7 @@ fn prepare_scene(
     let desc = load_scene(py, &scene, defines)?;
     let source = scene.display().to_string();
     let inner = py
-        .detach(|| Prepared::new(&desc))
+        .detach(|| Prepared::new_owned(desc))
         .map_err(|e| render_err(e, &source))?;
     Ok(PyPrepared {
         inner: Arc::new(inner),

@@ -62,7 +62,7 @@ fn main() -> ExitCode {
         ..Default::default()
     };
     let t0 = std::time::Instant::now();
-    let out = match pool.install(|| fgf_render::render(&scene, &opts, &fgf_core::NoProgress)) {
+    let out = match pool.install(|| fgf_render::render_owned(scene, &opts, &fgf_core::NoProgress)) {
         Ok(o) => o,
         Err(e) => {
             eprintln!("error: {e}");

@@ -47,4 +47,4 @@ pub mod world;
 
 pub use error::RenderError;
 pub use film::RenderOutput;
-pub use render::{render, RenderOptions};
+pub use render::{render, render_owned, RenderOptions};

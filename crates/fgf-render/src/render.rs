@@ -88,9 +88,24 @@ pub struct Prepared {
 impl Prepared {
     /// Validate and compile `scene` (its BVH, media and emitters).
     pub fn new(scene: &SceneDesc) -> Result<Prepared, RenderError> {
-        let world = World::build(scene)?;
+        Ok(Self::around(World::build(scene)?, scene))
+    }
+
+    /// [`Prepared::new`] of a scene given up to it: its meshes' own arrays
+    /// are let go of before the tree is built
+    /// ([`World::build_releasing_meshes`]), which lowers the peak memory of
+    /// a large mesh's preparation.
+    pub fn new_owned(mut scene: SceneDesc) -> Result<Prepared, RenderError> {
+        Ok(Self::around(
+            World::build_releasing_meshes(&mut scene)?,
+            &scene,
+        ))
+    }
+
+    /// The prepared scene of `world`, compiled from `scene`.
+    fn around(world: World, scene: &SceneDesc) -> Prepared {
         let (width, height) = (world.camera.width as usize, world.camera.height as usize);
-        Ok(Prepared {
+        Prepared {
             beams: world.takes_first_hit(),
             lockstep: cfg!(all(target_arch = "x86_64", target_feature = "avx2")),
             world,
@@ -99,7 +114,7 @@ impl Prepared {
             seed: scene.sensor.seed,
             width,
             height,
-        })
+        }
     }
 
     /// The exact sums of samples `samples` (`s0..s1`, indices from 0) of
@@ -593,7 +608,24 @@ pub fn render(
     opts: &RenderOptions,
     progress: &dyn Progress,
 ) -> Result<RenderOutput, RenderError> {
-    let prepared = Prepared::new(scene)?;
+    render_prepared(Prepared::new(scene)?, opts, progress)
+}
+
+/// [`render`] of a scene given up to it, in less memory for large meshes
+/// ([`Prepared::new_owned`]): the same image.
+pub fn render_owned(
+    scene: SceneDesc,
+    opts: &RenderOptions,
+    progress: &dyn Progress,
+) -> Result<RenderOutput, RenderError> {
+    render_prepared(Prepared::new_owned(scene)?, opts, progress)
+}
+
+fn render_prepared(
+    prepared: Prepared,
+    opts: &RenderOptions,
+    progress: &dyn Progress,
+) -> Result<RenderOutput, RenderError> {
     let spp = opts.spp.unwrap_or(prepared.spp);
     if spp == 0 {
         return Err(RenderError::InvalidOption(
@@ -775,15 +807,9 @@ mod tests {
         assert!(Prepared::new(&desc).unwrap().world.lone_envmap().is_none());
     }
 
-    /// The beam query of a pixel's camera rays changes no path: a textured
-    /// rough-plastic height field of 18,432 triangles under an environment
-    /// and an area light, rendered with beams and with every camera ray
-    /// queried alone (the reference), gives the same image bit for bit, and
-    /// so does the beam render split into sample ranges that cut the beams
-    /// differently (rendered apart and merged).
-    #[test]
-    fn camera_beams_match_single_ray_queries() {
-        let xml = r#"<scene version="3.0.0">
+    /// A textured rough-plastic height field under an environment and an
+    /// area light (with [`with_height_field`]).
+    const LIT_FIELD: &str = r#"<scene version="3.0.0">
             <integrator type="path"><integer name="max_depth" value="6"/></integrator>
             <sensor type="perspective">
                 <float name="fov" value="50"/>
@@ -813,6 +839,46 @@ mod tests {
                 </bsdf>
             </shape>
         </scene>"#;
+
+    /// A scene given up to the render ([`super::render_owned`]) gives the
+    /// image of the same scene lent to it ([`super::render`]) bit for bit,
+    /// and its meshes' arrays are freed once compiled, before the tree is
+    /// built.
+    #[test]
+    fn owned_scenes_render_alike_and_let_go_of_their_meshes() {
+        let opts = super::RenderOptions {
+            spp: Some(4),
+            seed: Some(5),
+            ..Default::default()
+        };
+        let desc = with_height_field(LIT_FIELD, 96);
+        let lent = super::render(&desc, &opts, &NoProgress).unwrap();
+        assert!(
+            lent.image.iter().any(|&v| v > 0.0),
+            "the image should not be black"
+        );
+        let given = super::render_owned(desc.clone(), &opts, &NoProgress).unwrap();
+        assert_eq!(lent.image, given.image);
+        let mut desc = desc;
+        let GeometryDesc::Mesh(mesh) = &desc.shapes.last().unwrap().geometry else {
+            panic!("the height field is a mesh")
+        };
+        let mesh = std::sync::Arc::downgrade(mesh);
+        let world = crate::world::World::build_releasing_meshes(&mut desc).unwrap();
+        assert!(mesh.upgrade().is_none(), "the mesh should be freed");
+        assert_eq!(world.geom.areas.len(), desc.shapes.len());
+        assert!((world.geom.areas.last().unwrap() - 16.0).abs() < 1.0);
+    }
+
+    /// The beam query of a pixel's camera rays changes no path: a textured
+    /// rough-plastic height field of 18,432 triangles under an environment
+    /// and an area light, rendered with beams and with every camera ray
+    /// queried alone (the reference), gives the same image bit for bit, and
+    /// so does the beam render split into sample ranges that cut the beams
+    /// differently (rendered apart and merged).
+    #[test]
+    fn camera_beams_match_single_ray_queries() {
+        let xml = LIT_FIELD;
         let desc = with_height_field(xml, 96);
         let with = Prepared::new(&desc).unwrap();
         assert!(with.beams, "the scene should take beams");

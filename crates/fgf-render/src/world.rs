@@ -8,8 +8,9 @@ use crate::emitter::Emitter;
 use crate::error::RenderError;
 use crate::geometry::Geometry;
 use crate::medium::Medium;
-use fgf_scene::SceneDesc;
+use fgf_scene::{GeometryDesc, SceneDesc, TriangleMesh};
 use glam::Vec3A;
+use std::sync::Arc;
 
 /// Per-shape data the integrator needs at a hit.
 #[derive(Debug, Clone, Copy)]
@@ -91,6 +92,35 @@ impl World {
     pub fn build(desc: &SceneDesc) -> Result<World, RenderError> {
         desc.validate()?;
         let geom = Geometry::build(&desc.shapes)?;
+        Self::assemble(desc, geom)
+    }
+
+    /// [`World::build`], which also lets go of `desc`'s meshes (each is
+    /// left empty) once the geometry has its own copies of their data and
+    /// before it builds its tree, the step that takes the most memory: a
+    /// 4M-triangle mesh's positions, normals, texture coordinates and
+    /// faces are 112 MB (`docs/benchmarks.md`, "A mesh's own arrays let go
+    /// of"). Their memory is freed if `desc` held the only references.
+    pub fn build_releasing_meshes(desc: &mut SceneDesc) -> Result<World, RenderError> {
+        desc.validate()?;
+        let compiled = Geometry::compile(&desc.shapes)?;
+        let empty = Arc::new(TriangleMesh {
+            positions: Vec::new(),
+            normals: None,
+            texcoords: None,
+            indices: Vec::new(),
+        });
+        for s in &mut desc.shapes {
+            if let GeometryDesc::Mesh(mesh) = &mut s.geometry {
+                *mesh = empty.clone();
+            }
+        }
+        Self::assemble(desc, compiled.finish())
+    }
+
+    /// The world of `desc` around its geometry `geom` (which reads only
+    /// what is not geometry of `desc.shapes`).
+    fn assemble(desc: &SceneDesc, geom: Geometry) -> Result<World, RenderError> {
         let bsdfs: Vec<Bsdf> = desc.bsdfs.iter().map(Bsdf::from_desc).collect();
         let media = desc
             .media

@@ -148,7 +148,7 @@ fn validate(shape: &ShapeDesc) -> Result<(), RenderError> {
 
 /// The primitives of the shapes compiled so far, in shape order.
 #[derive(Default)]
-struct Builder {
+pub(crate) struct Builder {
     corners: Vec<Corners>,
     positions: Vec<glam::Vec3>,
     normals: Vec<glam::Vec3>,
@@ -166,6 +166,14 @@ impl Geometry {
     /// Compile `shapes` (each checked by `validate` first) and build the
     /// BVH over all their primitives.
     pub fn build(shapes: &[ShapeDesc]) -> Result<Geometry, RenderError> {
+        Ok(Self::compile(shapes)?.finish())
+    }
+
+    /// The first half of [`Geometry::build`]: `shapes` checked and their
+    /// primitives made, in world space, with copies of the meshes' vertex
+    /// data. [`Builder::finish`] builds the tree; `shapes` are not needed
+    /// for it.
+    pub(crate) fn compile(shapes: &[ShapeDesc]) -> Result<Builder, RenderError> {
         let mut g = Builder::default();
         if shapes.len() as u64 > u64::from(!Corners::FLAGS) {
             return Err(RenderError::InvalidScene(format!(
@@ -179,7 +187,7 @@ impl Geometry {
             validate(shape)?;
             g.add_shape(si as u32, shape);
         }
-        Ok(g.finish())
+        Ok(g)
     }
 }
 
@@ -453,7 +461,7 @@ impl Builder {
 
     /// The BVH over every primitive, the primitives stored in its leaf
     /// order (each leaf starting a pack of `bvh::PACK`) and the packs.
-    fn finish(self) -> Geometry {
+    pub(crate) fn finish(self) -> Geometry {
         let bounds: Vec<Aabb> = self
             .prims
             .par_iter()
