@@ -99,8 +99,8 @@ impl World {
     /// left empty) once the geometry has its own copies of their data and
     /// before it builds its tree, the step that takes the most memory: a
     /// 4M-triangle mesh's positions, normals, texture coordinates and
-    /// faces are 112 MB (`docs/benchmarks.md`, "A mesh's own arrays let go
-    /// of"). Their memory is freed if `desc` held the only references.
+    /// faces are 112 MB (`docs/benchmarks.md`, "Large meshes without their
+    /// `Tri`s"). Their memory is freed if `desc` held the only references.
     pub fn build_releasing_meshes(desc: &mut SceneDesc) -> Result<World, RenderError> {
         desc.validate()?;
         let compiled = Geometry::compile(&desc.shapes)?;
