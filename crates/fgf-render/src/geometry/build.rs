@@ -74,20 +74,23 @@ fn retain_after<T>(v: &mut Vec<T>, first: usize, keep: &[bool]) {
 }
 
 /// Give the vertices `base..end` of the geometry, a new mesh's, their
-/// entries in `dst`, one of its per-vertex arrays (normals, uvs): the
-/// mesh's `data` where it has them (as many as it has, up to its vertex
-/// count), zero for the rest and for earlier meshes without; nothing while
-/// no mesh has any. Returns how many of the mesh's vertices have data.
-fn extend_vertex_data<T: Copy + Default>(
+/// entries in `dst`, one of its per-vertex arrays (normals, uvs): `f` of
+/// the mesh's `data` where it has them (as many as it has, up to its
+/// vertex count; [`extend_mapped`], straight into `dst`), zero for the rest
+/// and for earlier meshes without; nothing while no mesh has any. Returns
+/// how many of the mesh's vertices have data.
+fn extend_vertex_data<S: Sync, T: Copy + Default + Send>(
     dst: &mut Vec<T>,
     base: usize,
     end: usize,
-    data: Option<&[T]>,
+    data: Option<&[S]>,
+    f: impl Fn(&S) -> T + Sync + Send,
 ) -> usize {
-    let n = data.map_or(0, |d| d.len().min(end - base));
+    let data = data.unwrap_or_default();
+    let n = data.len().min(end - base);
     if n > 0 || !dst.is_empty() {
         dst.resize(base, T::default());
-        dst.extend_from_slice(&data.unwrap_or_default()[..n]);
+        extend_mapped(dst, &data[..n], f);
         dst.resize(end, T::default());
     }
     n
@@ -351,24 +354,18 @@ impl Builder {
     ) {
         // (Each element's work on its own, on the rayon pool for a large
         // mesh: the same values in the same order as one thread's.) The
-        // vertices join the geometry's
-        // arrays after those of the meshes before, with their normals and
-        // uvs.
+        // vertices join the geometry's arrays after those of the meshes
+        // before, with their normals (in world space) and uvs.
         let base = self.positions.len() as u32;
         extend_mapped(&mut self.positions, pos, |&p| {
             glam::Vec3::from(m.transform_point3a(p.into()))
         });
         let end = self.positions.len();
         let nm = Mat3::from_mat4(*m).inverse().transpose();
-        let wn: Option<Vec<glam::Vec3>> = normals.map(|ns| {
-            let mut wn = Vec::with_capacity(ns.len());
-            extend_mapped(&mut wn, ns, |&n| {
-                (Vec3A::from(nm * n).normalize_or_zero() * sign).into()
-            });
-            wn
+        let n_normals = extend_vertex_data(&mut self.normals, base as usize, end, normals, |&n| {
+            (Vec3A::from(nm * n).normalize_or_zero() * sign).into()
         });
-        let n_normals = extend_vertex_data(&mut self.normals, base as usize, end, wn.as_deref());
-        let n_uvs = extend_vertex_data(&mut self.uvs, base as usize, end, uvs);
+        let n_uvs = extend_vertex_data(&mut self.uvs, base as usize, end, uvs, |&t| t);
         let first = self.corners.len();
         // Each face given by its vertices at v0, v0 + e1 (u = 1) and v0 + e2
         // (v = 1), which index the uvs and, for a triangle, the vertex
