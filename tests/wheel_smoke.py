@@ -14,12 +14,42 @@ import tempfile
 import numpy as np
 
 
+def check_build(where: str) -> str:
+    """The wheel carries the portable module and, on x86-64, its x86-64-v3
+    build; ``import fgf`` loaded the one this CPU runs, or the portable one
+    under ``FGF_PORTABLE=1`` (fgf/_native.py). Returns what was loaded."""
+    import platform
+
+    import fgf
+    from fgf import _native
+
+    builds = sorted(f for f in os.listdir(where) if f.startswith("_core") and not f.endswith(".pyi"))
+    (portable,) = [os.path.join(where, f) for f in builds if f.startswith("_core.")]
+    if platform.machine() != "x86_64":
+        assert len(builds) == 1, builds
+        assert fgf._core.__file__ == portable, fgf._core.__file__
+        return f"the portable build ({fgf._core.simd})"
+    assert builds == sorted([os.path.basename(portable), os.path.basename(_native.v3_path(portable))]), builds
+    v3 = _native.cpu_runs_v3(portable) and not _native.forced_portable()
+    want = _native.v3_path(portable) if v3 else portable
+    assert fgf._core.__file__ == want, (fgf._core.__file__, want)
+    assert fgf._core.simd == ("avx2" if v3 else "sse2"), fgf._core.simd
+    # `from fgf import _core` anywhere in the package is the same module.
+    render = sys.modules["fgf.render"]
+    assert render._core is fgf._core and sys.modules["fgf._core"] is fgf._core, render._core
+    if v3:
+        return "the x86-64-v3 build (avx2)"
+    why = "FGF_PORTABLE=1" if _native.forced_portable() else "this CPU does not run x86-64-v3"
+    return f"the portable build (sse2; {why})"
+
+
 def main() -> int:
     import fgf
 
     where = os.path.dirname(fgf.__file__)
     assert "site-packages" in where, f"fgf imported from {where}, not from the installed wheel"
     assert fgf._core.__file__.startswith(where), fgf._core.__file__
+    build = check_build(where)
 
     # Tr values: an exponential medium is exp(-sigma_t t); FGF lies above it
     # for t > 0 (positively correlated extinction) and starts at 1.
@@ -75,8 +105,8 @@ def main() -> int:
     # The `fgf` console script of the venv prints the package version.
     exe = os.path.join(os.path.dirname(sys.executable), "fgf")
     out = subprocess.run([exe, "--version"], capture_output=True, text=True, check=True).stdout.strip()
-    assert out == f"fgf {fgf.__version__}", out
-    print(f"wheel smoke test passed: {out}, imported from {where}")
+    assert out == f"fgf {fgf.__version__} ({fgf._core.simd})", out
+    print(f"wheel smoke test passed: {out}, imported from {where}, {build}")
     return 0
 
 

@@ -46,6 +46,12 @@ def _cli_sigint_guard() -> None:
 
 _cli_sigint_guard()
 
+# The build of the native module that this CPU runs best (fgf/_native.py).
+from . import _native  # noqa: E402
+
+_native.load()
+del _native
+
 from ._core import FgfError, ParameterError, SceneError, __version__
 
 __all__ = ["FgfError", "ParameterError", "SceneError", "__version__"]

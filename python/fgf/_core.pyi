@@ -14,8 +14,10 @@ import numpy as np
 import numpy.typing as npt
 
 __version__: str
+simd: str
 __all__ = [
     "__version__",
+    "simd",
     "FgfError",
     "ParameterError",
     "SceneError",

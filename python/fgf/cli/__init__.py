@@ -24,13 +24,13 @@ COMMANDS = ["transmittance", "field", "render", "ensemble", "truth", "figures"]
 
 
 def build_parser() -> argparse.ArgumentParser:
-    from .. import __version__
+    from .. import __version__, _core
 
     parser = argparse.ArgumentParser(
         prog="fgf",
         description="Fractional Gaussian fields for modeling and rendering spatially-correlated media.",
     )
-    parser.add_argument("--version", action="version", version=f"fgf {__version__}")
+    parser.add_argument("--version", action="version", version=f"fgf {__version__} ({_core.simd})")
     sub = parser.add_subparsers(dest="command", required=True, metavar="COMMAND")
     for name in COMMANDS:
         importlib.import_module(f"{__name__}.{name}").register(sub)
