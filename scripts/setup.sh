@@ -81,18 +81,11 @@ else
         "${@:2}"
     )
     # rustc tracks the profile file: a new one rebuilds every crate. So a
-    # profile is kept while what it was trained from is unchanged (the
-    # toolchain, the flags, and the tracked and modified files of the
-    # sources, the Python package, the scenes and the training), and set-up
-    # run again (as scripts/test.sh runs it) then rebuilds nothing. Outside a
-    # git checkout there is no key, and every run trains afresh.
-    inputs="crates Cargo.toml Cargo.lock .cargo python scenes scripts/setup.sh scripts/pgo-train.sh benchmarks/make_mesh_envmap.py"
-    key=""
-    if git rev-parse --is-inside-work-tree >/dev/null 2>&1; then
-        # shellcheck disable=SC2086
-        key=$({ rustc -vV; echo "RUSTFLAGS=${RUSTFLAGS-(unset)}"; git ls-files -s -- $inputs
-            git diff HEAD -- $inputs; git ls-files -o --exclude-standard -- $inputs; } | sha256sum | cut -d' ' -f1)
-    fi
+    # profile is kept while what it was trained from is unchanged
+    # (scripts/pgo-key.sh), and set-up run again (as scripts/test.sh runs it)
+    # then rebuilds nothing. Outside a git checkout there is no key, and
+    # every run trains afresh.
+    key=$(bash scripts/pgo-key.sh)
     if [ -n "$key" ] && [ -f "$pgo/fgf.profdata" ] && [ "$(cat "$pgo/key" 2>/dev/null)" = "$key" ]; then
         echo "setup: sources unchanged since the last training; building with its profile"
         with_flag "-Cprofile-use=$pgo/fgf.profdata" build
