@@ -2,7 +2,7 @@
 
     python benchmarks/bench_render.py [--spp 1024] [--repeats 3] [--res 256] [--max-depth 64]
                                       [--threads N] [--scene NAME]... [--no-warmup] [--no-inprocess]
-                                      [--variant scalar_rgb]
+                                      [--variant scalar_rgb] [--also LABEL=COMMAND]...
     python benchmarks/bench_render.py --scaling [--res 128] [--spp 64] [--repeats 3]
 
 Default mode: whole processes, the way a user renders a scene file:
@@ -24,6 +24,13 @@ spp that both render the same image). A second, separate column keeps the old in
 figure: ``fgf.render`` and ``mi.render`` inside an already started Python,
 64 spp, best of ``--repeats`` after a warm-up render, in M samples/s; it
 leaves out start-up and compilation and is not what a user waits for.
+
+``--also LABEL=COMMAND``: another build of fgf, timed in the same rounds (the
+first command of round k is the k-th, so each goes first in turn), e.g. the
+wheel's two builds (docs/benchmarks.md, "One wheel, two builds"):
+``--also "wheel=/tmp/wv/bin/fgf" --also "portable=env FGF_PORTABLE=1
+/tmp/wv/bin/fgf"``. Each is reported with its speed-up, and whether its EXR
+is identical to the first fgf's byte for byte.
 
 ``--variant``: the Mitsuba variant of the whole-process runs (default
 ``llvm_ad_rgb``, the one the goals are stated against). ``scalar_rgb`` traces
@@ -55,6 +62,7 @@ import json
 import os
 import platform
 import resource
+import shlex
 import shutil
 import statistics
 import subprocess
@@ -152,28 +160,49 @@ def commands(scene: Path, out: Path, args: argparse.Namespace) -> dict[str, list
     if args.threads is not None:
         fgf += ["--threads", str(args.threads)]
         mts += ["-t", str(args.threads)]
-    return {"fgf": fgf, "mitsuba": mts + [str(scene)]}
+    cmds = {"fgf": fgf}
+    # Other builds of fgf (--also LABEL=COMMAND): the same arguments, their own output.
+    for label, command in also(args):
+        cmds[label] = shlex.split(command) + fgf[1:4] + [str(out / f"{label}.exr")] + fgf[5:]
+    return {**cmds, "mitsuba": mts + [str(scene)]}
+
+
+def also(args: argparse.Namespace) -> list[tuple[str, str]]:
+    """The --also builds as (label, command) pairs."""
+    pairs = []
+    for item in args.also:
+        label, sep, command = item.partition("=")
+        if not sep or not label or not command or label in ("fgf", "mitsuba"):
+            sys.exit(f"bench_render: error: --also {item!r}: expected LABEL=COMMAND, LABEL not fgf or mitsuba")
+        pairs.append((label, command))
+    return pairs
 
 
 def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, Any]]:
     """Alternated whole-process runs; medians of wall and CPU time per renderer."""
     env = dict(os.environ, DRJIT_LIBLLVM_PATH=os.environ.get("DRJIT_LIBLLVM_PATH", LLVM19))
-    runs: dict[str, list[tuple[float, float]]] = {"fgf": [], "mitsuba": []}
     with tempfile.TemporaryDirectory(prefix="bench_render_") as tmp:
         cmds = commands(scene, Path(tmp), args)
+        names = list(cmds)
+        runs: dict[str, list[tuple[float, float]]] = {name: [] for name in names}
         if args.warmup:
-            for name in ("fgf", "mitsuba"):
+            for name in names:
                 timed(cmds[name], env)
+        # Round k starts with the k-th command: each goes first once in
+        # len(names) rounds (with two, they alternate).
         for k in range(args.repeats):
-            order = ("fgf", "mitsuba") if k % 2 == 0 else ("mitsuba", "fgf")
-            for name in order:
+            for name in names[k % len(names) :] + names[: k % len(names)]:
                 runs[name].append(timed(cmds[name], env))
         diff = mean_difference(Path(tmp) / "fgf.exr", Path(tmp) / "mitsuba.exr")
+        reference = (Path(tmp) / "fgf.exr").read_bytes()
+        same = {label: (Path(tmp) / f"{label}.exr").read_bytes() == reference for label, _ in also(args)}
     out: dict[str, dict[str, Any]] = {
         name: {"wall": statistics.median(r[0] for r in rs), "cpu": statistics.median(r[1] for r in rs)}
         for name, rs in runs.items()
     }
     out["fgf"]["mean_diff"] = diff
+    for label, identical in same.items():
+        out[label]["same_exr"] = identical
     # Every round's wall time, for the spread behind the medians.
     for name, rs in runs.items():
         out[name]["rounds"] = [r[0] for r in rs]
@@ -267,16 +296,21 @@ def compare(args: argparse.Namespace) -> None:
         r = processes(scene, args)
         ip = inprocess(scene, args) if args.inprocess else {}
         f, m = r["fgf"], r["mitsuba"]
-        for who, label in (("fgf", "fgf"), ("mitsuba", f"mitsuba {args.variant}")):
+        for who in r:
+            label = f"mitsuba {args.variant}" if who == "mitsuba" else who
             x = r[who]
-            su = f"{m['wall'] / f['wall']:12.2f}x {m['cpu'] / f['cpu']:11.2f}x" if who == "fgf" else f"{'':>13} {'':>12}"
-            extra = f" | {ip[who]:8.3f}" if ip else ""
+            su = f"{m['wall'] / x['wall']:12.2f}x {m['cpu'] / x['cpu']:11.2f}x" if who != "mitsuba" else f"{'':>13} {'':>12}"
+            extra = f" | {ip[who]:8.3f}" if ip and who in ip else ""
             if ip and who == "fgf":
                 extra += f" ({ip['fgf'] / ip['mitsuba']:.2f}x)"
             print(f"{scene.stem:<24} {label:<20} {x['wall']:8.2f} {x['cpu']:8.2f} {su}{extra}")
         d = " ".join(f"{100 * v:+.3f}%" for v in f["mean_diff"])
         print(f"{scene.stem:<24} {'image mean fgf/mitsuba - 1 (r g b)':<45} {d}")
-        for who in ("fgf", "mitsuba"):
+        for who in r:
+            if "same_exr" in r[who]:
+                same = "identical" if r[who]["same_exr"] else "DIFFERENT"
+                print(f"{scene.stem:<24} {who + ' EXR against fgf EXR':<45} {same}")
+        for who in r:
             rounds = " ".join(f"{t:.2f}" for t in r[who]["rounds"])
             print(f"{scene.stem:<24} {who + ' wall s by round':<45} {rounds}")
 
@@ -338,6 +372,9 @@ def main() -> int:
     ap.add_argument("--no-warmup", dest="warmup", action="store_false", help="no untimed first run")
     ap.add_argument("--no-inprocess", dest="inprocess", action="store_false",
                     help=f"leave out the in-process {INPROCESS_SPP}-spp column")
+    ap.add_argument("--also", action="append", default=[], metavar="LABEL=COMMAND",
+                    help="another fgf build to time in the same rounds, e.g. "
+                    "'portable=env FGF_PORTABLE=1 /tmp/venv/bin/fgf' (repeatable)")
     ap.add_argument("--scaling", action="store_true", help="thread scaling and cost linearity instead")
     ap.add_argument("--variant", default="llvm_ad_rgb", choices=["llvm_ad_rgb", "scalar_rgb"],
                     help="Mitsuba variant of the whole-process runs (default llvm_ad_rgb)")
