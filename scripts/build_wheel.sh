@@ -33,7 +33,7 @@ if [ "$(uname -m)" != x86_64 ]; then
 fi
 # The x86-64-v3 build is profile-guided with the profile of scripts/setup.sh's
 # build (ARCHITECTURE.md, "Build") when it was trained from these very
-# sources: on the homogeneous cube that is 14 % less time. A few functions
+# sources: on the homogeneous cube that is 17 % less time. A few functions
 # whose code differs from the native build's are compiled without it, which
 # LLVM would warn of one by one. The portable build, whose lanes differ from
 # the native build's throughout, is not: the profile made it 10 % slower there.
