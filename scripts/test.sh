@@ -6,11 +6,13 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 bash scripts/setup.sh --test
 . .venv/bin/activate
-echo "== lint: cargo fmt --check, cargo clippy -D warnings, cargo doc -D warnings, mypy"
+echo "== lint: cargo fmt --check, cargo clippy -D warnings, cargo doc -D warnings, mypy, stubtest"
 cargo fmt --all -- --check
 cargo clippy --workspace --all-targets --release -- -D warnings
 RUSTDOCFLAGS="-D warnings" cargo doc --workspace --no-deps -q
 python -m mypy python/fgf benchmarks
+# The native module's stub against the module itself.
+python -m mypy.stubtest fgf._core
 echo "== cargo test (workspace)"
 cargo test --workspace --exclude fgf-py --release
 echo "== pytest (fast)"

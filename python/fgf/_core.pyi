@@ -44,6 +44,9 @@ __all__ = [
     "render_scene",
     "write_exr",
     "write_png",
+    "bsdf_eval_pdf",
+    "bsdf_sample",
+    "shading_frame",
     "ensemble_scene",
     "PreparedScene",
     "prepare_scene",
@@ -233,8 +236,18 @@ def bsdf_sample(
     random numbers ``u`` (``(n, 3)``: the lobe choice, then the direction): ``(wo (n, 3),
     weight f·|cos θ_o|/pdf (n, 3), pdf (n,))``, zeros where no sample, as Mitsuba's ``BSDF.sample``."""
 
+def shading_frame(
+    scene: str,
+    origins: _F32Array,
+    directions: _F32Array,
+    defines: Sequence[tuple[str, str]] | None = None,
+) -> tuple[_F32Array, npt.NDArray[np.int64]]:
+    """The shading frame ``(s, t, n)`` at the first hits of ``(n, 3)`` rays: ``(frames (n, 9), NaN
+    for a miss; the shape hit (n,), -1 for a miss)``, the frame anisotropic BSDFs are evaluated in."""
+
 _U64Array: TypeAlias = npt.NDArray[np.uint64]
 
+@final
 class PreparedScene:
     """A compiled scene kept by a worker (see ``fgf.cluster``)."""
 
@@ -315,7 +328,7 @@ def render_truth_node(
 class TruthBar:
     """An indicatif bar on stderr that several calls advance."""
 
-    def __init__(self, total: int, label: str = "truth") -> None: ...
+    def __new__(cls, total: int, label: str = "truth") -> TruthBar: ...
     def update(self, n: int) -> None: ...
     def set_message(self, msg: str) -> None: ...
     def close(self) -> None: ...
