@@ -17,7 +17,7 @@ echo "== cargo test (workspace)"
 cargo test --workspace --exclude fgf-py --release
 echo "== pytest (fast)"
 python -m pytest -q -m "not slow"
-echo "== wheel: portable build, fresh venv, smoke test"
+echo "== wheel: its portable and x86-64-v3 builds, fresh venv, smoke tests"
 bash scripts/wheel_smoke.sh
 echo "== slow statistical tests"
 cargo test --workspace --exclude fgf-py --release -- --ignored
