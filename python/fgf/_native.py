@@ -45,11 +45,11 @@ def v3_path(portable: str) -> str:
     return os.path.join(where, V3_STEM + name[len("_core") :])
 
 
-def choose(portable: str, v3_exists: bool, forced_portable: bool, runs_v3: Callable[[], bool]) -> str:
-    """The file to load: the x86-64-v3 build if it is there, not turned off,
-    and the CPU runs it (``runs_v3`` is asked only then); else the portable
-    build."""
-    if v3_exists and not forced_portable and runs_v3():
+def choose(portable: str, v3_exists: bool, forced: bool, runs_v3: Callable[[], bool]) -> str:
+    """The file to load: the x86-64-v3 build if it is there, not turned off
+    (``forced``: the portable one is asked for), and the CPU runs it
+    (``runs_v3`` is asked only then); else the portable build."""
+    if v3_exists and not forced and runs_v3():
         return v3_path(portable)
     return portable
 
