@@ -41,6 +41,7 @@ pgo=""
 if [ "${FGF_PGO:-1}" != 0 ] && [ -f target/pgo/fgf.profdata ] \
     && [ "$(cat target/pgo/key 2>/dev/null)" = "$(bash scripts/pgo-key.sh)" ]; then
     pgo="-Cprofile-use=$PWD/target/pgo/fgf.profdata -Cllvm-args=-no-pgo-warn-mismatch"
+    echo "build_wheel: the x86-64-v3 build is profile-guided (target/pgo/fgf.profdata)" >&2
 else
     echo "build_wheel: note: no profile trained from these sources (scripts/setup.sh makes one); building without profile guidance" >&2
 fi
