@@ -1,7 +1,11 @@
 //! PLY meshes: our own reader (see the parent module for why). The file is
 //! read a buffer at a time, never whole: a 4M-triangle mesh's PLY is 116 MB,
 //! which took as many fresh pages and a copy (`docs/benchmarks.md`, "Large
-//! meshes without their `Tri`s").
+//! meshes without their `Tri`s"). In a binary file, the records of an
+//! element of scalars alone (a mesh's vertices, mostly) and a face's
+//! indices are taken from the buffer whole and decoded from the slice,
+//! not checked against the buffer value by value (`docs/benchmarks.md`,
+//! "PLY records read whole").
 
 use super::{finish, open_file};
 use crate::desc::TriangleMesh;
@@ -224,11 +228,55 @@ impl<R: Read> Body<R> {
 
     /// A list length or index: a non-negative integer.
     fn read_index(&mut self, t: Scalar, what: &str) -> Result<usize, String> {
-        let v = self.read(t)?;
-        if !(v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64) {
-            return Err(format!("{what} {v} is not a valid non-negative integer"));
+        index(self.read(t)?, what)
+    }
+
+    /// One record of an element with properties `props`, value by value:
+    /// each scalar into `vals` at its property's place; lists are skipped.
+    fn read_record(&mut self, props: &[Prop], vals: &mut [f64]) -> Result<(), String> {
+        for (k, p) in props.iter().enumerate() {
+            match p {
+                Prop::Scalar(t, _) => vals[k] = self.read(*t)?,
+                Prop::List(c, t, _) => {
+                    let n = self.read_index(*c, "list length")?;
+                    for _ in 0..n {
+                        self.read(*t)?;
+                    }
+                }
+            }
         }
-        Ok(v as usize)
+        Ok(())
+    }
+
+    /// `n` list items of type `t`, as vertex indices appended to `out`; in
+    /// a binary body all at once where they fit the buffer.
+    fn read_indices(&mut self, t: Scalar, n: usize, out: &mut Vec<u32>) -> Result<(), String> {
+        let size = t.size();
+        if self.fmt != Format::Ascii && n.saturating_mul(size) <= CHUNK {
+            let be = self.fmt == Format::Be;
+            for raw in self.take(n * size)?.chunks_exact(size) {
+                out.push(index(t.decode(raw, be), "vertex index")? as u32);
+            }
+            return Ok(());
+        }
+        for _ in 0..n {
+            out.push(self.read_index(t, "vertex index")? as u32);
+        }
+        Ok(())
+    }
+
+    /// The next `n` bytes of a binary body (`n` at most [`CHUNK`]), as
+    /// one slice: a record's values are then decoded from it without a
+    /// check of the buffer each.
+    #[inline]
+    fn take(&mut self, n: usize) -> Result<&[u8], String> {
+        debug_assert!(self.fmt != Format::Ascii && n <= CHUNK);
+        if self.hi - self.lo < n && !self.fill(n)? {
+            return Err("unexpected end of file".into());
+        }
+        let start = self.lo;
+        self.lo += n;
+        Ok(&self.buf[start..start + n])
     }
 
     /// Smallest number of bytes one value can take (to bound counts).
@@ -327,6 +375,32 @@ fn parse_header(b: &[u8]) -> Result<(Format, Vec<Element>, usize), String> {
     Ok((fmt, elements, body))
 }
 
+/// `v` as a list length or index: a non-negative integer that fits `u32`.
+#[inline]
+fn index(v: f64, what: &str) -> Result<usize, String> {
+    if !(v >= 0.0 && v.fract() == 0.0 && v <= u32::MAX as f64) {
+        return Err(format!("{what} {v} is not a valid non-negative integer"));
+    }
+    Ok(v as usize)
+}
+
+/// The byte offset of each property in a record of a binary element whose
+/// properties are all scalars, and the record's size (`None` if some
+/// property is a list, or the body is ascii): such records are read whole.
+fn fixed_layout(el: &Element, fmt: Format) -> Option<(Vec<(usize, Scalar)>, usize)> {
+    if fmt == Format::Ascii {
+        return None;
+    }
+    let mut size = 0;
+    let mut at = Vec::with_capacity(el.props.len());
+    for p in &el.props {
+        let Prop::Scalar(t, _) = p else { return None };
+        at.push((size, *t));
+        size += t.size();
+    }
+    (size <= CHUNK).then_some((at, size))
+}
+
 /// The mesh of the PLY file `src` of `len` bytes.
 fn parse_ply(src: impl Read, len: u64) -> Result<TriangleMesh, String> {
     let mut body = Body::new(src, len);
@@ -378,17 +452,16 @@ fn parse_ply(src: impl Read, len: u64) -> Result<TriangleMesh, String> {
                 let mut ps = Vec::with_capacity(el.count);
                 let mut ns = Vec::with_capacity(if has_n { el.count } else { 0 });
                 let mut vals = vec![0f64; el.props.len()];
+                let layout = fixed_layout(el, body.fmt);
+                let be = body.fmt == Format::Be;
                 for _ in 0..el.count {
-                    for (k, p) in el.props.iter().enumerate() {
-                        match p {
-                            Prop::Scalar(t, _) => vals[k] = body.read(*t)?,
-                            Prop::List(c, t, _) => {
-                                let n = body.read_index(*c, "list length")?;
-                                for _ in 0..n {
-                                    body.read(*t)?;
-                                }
-                            }
+                    if let Some((at, size)) = &layout {
+                        let rec = body.take(*size)?;
+                        for (v, &(o, t)) in vals.iter_mut().zip(at) {
+                            *v = t.decode(&rec[o..o + t.size()], be);
                         }
+                    } else {
+                        body.read_record(&el.props, &mut vals)?;
                     }
                     let g = |i: Option<usize>| vals[i.unwrap_or(0)] as f32;
                     ps.push(Vec3::new(g(xyz[0]), g(xyz[1]), g(xyz[2])));
@@ -429,9 +502,7 @@ fn parse_ply(src: impl Read, len: u64) -> Result<TriangleMesh, String> {
                                     ));
                                 }
                                 poly.clear();
-                                for _ in 0..n {
-                                    poly.push(body.read_index(*t, "vertex index")? as u32);
-                                }
+                                body.read_indices(*t, n, &mut poly)?;
                                 if k == li {
                                     if n < 3 {
                                         return Err(format!(
@@ -450,20 +521,9 @@ fn parse_ply(src: impl Read, len: u64) -> Result<TriangleMesh, String> {
                 indices = Some(tris);
             }
             _ => {
+                let mut vals = vec![0f64; el.props.len()];
                 for _ in 0..el.count {
-                    for p in &el.props {
-                        match p {
-                            Prop::Scalar(t, _) => {
-                                body.read(*t)?;
-                            }
-                            Prop::List(c, t, _) => {
-                                let n = body.read_index(*c, "list length")?;
-                                for _ in 0..n {
-                                    body.read(*t)?;
-                                }
-                            }
-                        }
-                    }
+                    body.read_record(&el.props, &mut vals)?;
                 }
             }
         }
@@ -640,6 +700,56 @@ mod tests {
             assert_eq!(t[1], Vec2::new(0.9, 0.3), "{a}, {b}");
         }
         assert!(parse(SQUARE_ASCII.as_bytes()).unwrap().texcoords.is_none());
+    }
+
+    /// A binary vertex element with a list among its properties is read
+    /// value by value (its records have no fixed size), and the indices of
+    /// a face read at once are checked as one by one: a negative one or a
+    /// fractional float is an error.
+    #[test]
+    fn binary_vertex_lists_and_bad_indices() {
+        let ply = |index_type: &str, face: &[u8]| {
+            let mut b = format!(
+                "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty list uchar short extra\nproperty float y\nproperty float z\nelement face 1\nproperty list uchar {index_type} vertex_indices\nend_header\n"
+            )
+            .into_bytes();
+            for (i, p) in [[0f32, 0.0, 0.0], [2.0, 0.0, 0.0], [0.0, 3.0, 0.0]]
+                .iter()
+                .enumerate()
+            {
+                b.extend(p[0].to_le_bytes());
+                b.push(i as u8);
+                for k in 0..i as i16 {
+                    b.extend((-k).to_le_bytes());
+                }
+                b.extend(p[1].to_le_bytes());
+                b.extend(p[2].to_le_bytes());
+            }
+            b.push(3);
+            b.extend(face);
+            b
+        };
+        let ints = |v: [i32; 3]| v.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>();
+        let floats = |v: [f32; 3]| v.iter().flat_map(|i| i.to_le_bytes()).collect::<Vec<u8>>();
+        let m = parse(&ply("int", &ints([0, 1, 2]))).unwrap();
+        assert_eq!(m.positions[2], Vec3::new(0.0, 3.0, 0.0));
+        assert_eq!(m.indices, vec![[0, 1, 2]]);
+        assert_eq!(
+            parse(&ply("float", &floats([0.0, 1.0, 2.0])))
+                .unwrap()
+                .indices,
+            vec![[0, 1, 2]]
+        );
+        for (t, face) in [
+            ("int", ints([0, -1, 2])),
+            ("float", floats([0.0, 1.5, 2.0])),
+        ] {
+            let e = parse(&ply(t, &face)).unwrap_err();
+            assert!(
+                e.contains("vertex index") && e.contains("not a valid"),
+                "{e}"
+            );
+        }
     }
 
     #[test]
