@@ -278,6 +278,24 @@ def test_ctrl_c_during_a_slow_scene_load(tmp_path):
     assert "Traceback" not in r.stderr and len(r.stderr.strip().splitlines()) == 1, r.stderr
 
 
+def test_ctrl_c_after_the_command_ends_keeps_its_exit_code(tmp_path):
+    # Once the error is printed the command is over: an interrupt while the
+    # interpreter shuts down must not turn exit code 2 into death by SIGINT.
+    scene = tmp_path / "bad.xml"
+    scene.write_text('<scene version="3.0.0"><bsdf type="no-such-bsdf"/></scene>')
+    for _ in range(3):
+        p = subprocess.Popen(
+            [sys.executable, "-m", "fgf", "render", str(scene), "-o", str(tmp_path / "o.exr")],
+            stderr=subprocess.PIPE, text=True,
+        )
+        assert p.stderr is not None
+        line = p.stderr.readline()
+        p.send_signal(signal.SIGINT)
+        rest = p.stderr.read()
+        p.wait(timeout=60)
+        assert p.returncode == 2 and "no-such-bsdf" in line and rest == "", (p.returncode, line, rest)
+
+
 # -- 5./6. one-line refusals and messages --------------------------------------------
 
 

@@ -9,7 +9,9 @@ a traceback. Ctrl-C at any stage (imports, argument parsing, scene loading,
 rendering, writing) exits with code 130 and one line: the package installs
 an exit-on-SIGINT handler before its heavy imports when it is run as the
 ``fgf`` command (see ``fgf/__init__.py``), and :func:`main` hands SIGINT
-back to Python's ``KeyboardInterrupt`` once it is ready to catch it.
+back to Python's ``KeyboardInterrupt`` once it is ready to catch it. Once
+the command's outcome is known, Ctrl-C no longer changes it: the process
+exits with the command's own code.
 """
 
 from __future__ import annotations
@@ -41,6 +43,11 @@ def build_parser() -> argparse.ArgumentParser:
 
 
 def main(argv: list[str] | None = None) -> int:
+    """Run the command line ``argv`` (default: the process's own) and return
+    its exit code. Without ``argv`` this is the ``fgf`` process itself: once
+    the command's outcome is known, Ctrl-C is ignored, so that an interrupt
+    while the message is printed or the interpreter shuts down cannot turn
+    the exit code into death by the signal."""
     command = "fgf"
     try:
         # From here on Ctrl-C is a KeyboardInterrupt, caught below; the
@@ -50,22 +57,29 @@ def main(argv: list[str] | None = None) -> int:
         from ._args import OptionError
 
         parser = build_parser()
+        message = None
         try:
             args = parser.parse_args(argv)
         except OptionError as e:
             words = sys.argv[1:] if argv is None else argv
             sub = next((w for w in words if w in COMMANDS), None)
-            print(f"fgf{' ' + sub if sub else ''}: error: {e}", file=sys.stderr)
-            return 2
-        command = f"fgf {args.command}"
-        from .. import FgfError
+            code, message = 2, f"fgf{' ' + sub if sub else ''}: error: {e}"
+        else:
+            command = f"fgf {args.command}"
+            from .. import FgfError
 
-        try:
-            return int(args.func(args) or 0)
-        except (FgfError, OSError) as e:
-            print(f"{command}: error: {_one_line(str(e))}", file=sys.stderr)
-            return 2
+            try:
+                code = int(args.func(args) or 0)
+            except (FgfError, OSError) as e:
+                code, message = 2, f"{command}: error: {_one_line(str(e))}"
+        if argv is None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        if message is not None:
+            print(message, file=sys.stderr)
+        return code
     except KeyboardInterrupt:
+        if argv is None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
         print(f"{command}: interrupted", file=sys.stderr)
         return 130
 
