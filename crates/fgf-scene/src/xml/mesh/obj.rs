@@ -126,15 +126,14 @@ pub(crate) fn load_obj(fnode: &XNode, path: &Path) -> Result<TriangleMesh, Scene
 /// in the file (tobj resolves faces at the end of each group). Lines tobj
 /// would refuse anyway (unparsable numbers) are left to it.
 fn check_face_indices(bytes: &[u8]) -> Result<(), String> {
-    let lines = || lines(bytes);
     let mut total = [0i64; 3];
-    for line in lines() {
+    for line in lines(bytes) {
         if let Some(k) = words(line, |w| w.next().and_then(kind_of)) {
             total[k] += 1;
         }
     }
     let mut so_far = [0i64; 3];
-    for (n, line) in lines().enumerate() {
+    for (n, line) in lines(bytes).enumerate() {
         words(line, |words| check_line(words, n, &total, &mut so_far))?;
     }
     Ok(())
