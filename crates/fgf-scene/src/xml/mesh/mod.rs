@@ -1,6 +1,6 @@
 //! Triangle meshes for the `obj` and `ply` shapes.
 //!
-//! * OBJ ([`obj`]): read with `tobj` (faces fan-triangulated, one index per vertex so
+//! * OBJ ([`obj`]): our own reader (faces fan-triangulated, one index per vertex so
 //!   that positions and normals line up; every `o`/`g` group is merged into
 //!   one mesh, as Mitsuba does).
 //! * PLY ([`ply`]): our own small reader for `ascii`, `binary_little_endian` and
