@@ -3,10 +3,10 @@
 //! It reads what the renderer uses: `v x y z [w]` (a `w` divides the
 //! coordinates; three more values, vertex colours, are ignored), `vt u v`,
 //! `vn x y z`, and `f` faces (`v`, `v/vt`, `v//vn`, `v/vt/vn`; indices from
-//! 1, negative ones counting back from the line; n-gons fan-triangulated).
-//! `o` and `g` start a new group; `l` lines of three or more vertices are
-//! read as faces, shorter `f`/`l` lines are skipped; other statements
-//! (`s`, `mtllib`, `usemtl`, ...) are ignored.
+//! 1, negative ones counting back from the line; n-gons fan-triangulated,
+//! faces of one or two vertices skipped). `o` and `g` start a new group;
+//! other statements (`l` polylines, `s`, `mtllib`, `usemtl`, ...) are
+//! ignored, as Mitsuba ignores them.
 //!
 //! The numbering of the vertices, on which the computed smooth normals
 //! depend, is the one `tobj` gave when it read our OBJ files (a test in
@@ -16,8 +16,9 @@
 //! coordinate and normal are bitwise equal to one of an earlier group is
 //! shared with it (Mitsuba merges the groups into one mesh). What it
 //! accepts and refuses is `tobj`'s too, with our check of the face indices
-//! before it, except that vertex colours on only some vertices are no
-//! longer an error.
+//! before it, except for two cases where we now do as Mitsuba does: vertex
+//! colours on only some vertices are no longer an error, and `l` lines are
+//! ignored (`tobj` read one of three vertices or more as a face).
 //!
 //! We replaced `tobj` with this reader for the time and memory of large
 //! files (`docs/benchmarks.md`, "Our own OBJ reader"): `tobj` makes a
@@ -112,8 +113,8 @@ struct Group {
     corners: Vec<Corner>,
     /// Its triangles, by its own vertex numbers.
     triangles: Vec<[u32; 3]>,
-    /// Whether it has an `f` or `l` line (one that is skipped included):
-    /// an `o` or `g` line then ends it.
+    /// Whether it has an `f` line (one that is skipped included): an `o`
+    /// or `g` line then ends it.
     has_faces: bool,
     /// Indices of its triangles' corners that name an element declared
     /// later in the file: (line, kind, index from 0). Each must be
@@ -184,7 +185,7 @@ fn read_obj(src: impl Read) -> Result<ObjMesh, String> {
                     let v = floats(w, "a normal's x, y and z").map_err(at)?;
                     push(&mut el.normals, Vec3::from(v), 2).map_err(at)?;
                 }
-                b"f" | b"l" => {
+                b"f" => {
                     group.has_faces = true;
                     let counts = el.counts();
                     let mut corners = 0;

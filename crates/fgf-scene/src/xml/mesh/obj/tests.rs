@@ -269,14 +269,13 @@ fn random_obj(rng: &mut impl Rng) -> String {
             nn += 1;
             format!("vn{sp}{}{sp}{}{sp}{}", num(rng), num(rng), num(rng))
         } else if r < 850 {
-            let key = if rng.random_bool(0.9) { "f" } else { "l" };
             let corners = if rng.random_bool(0.01) {
                 0
             } else {
                 [1, 2, 3, 3, 3, 3, 4, 4, 5, 6][rng.random_range(0..10)]
             };
             let form = rng.random_range(0..4);
-            let mut l = key.to_string();
+            let mut l = "f".to_string();
             for _ in 0..corners {
                 let index = |n: i64, rng: &mut dyn rand::RngCore| -> String {
                     let x = match rng.random_range(0..1000) {
@@ -522,7 +521,8 @@ fn face_indices_name_elements() {
 }
 
 /// Vertex colours are ignored, also when only some vertices have one
-/// (`tobj` refused such a file).
+/// (`tobj` refused such a file), and so are polylines (`tobj` read one of
+/// three vertices or more as a face), as in Mitsuba.
 #[test]
 fn colours_on_some_vertices_are_ignored() {
     let obj = b"v 0 0 0 1 0 0\nv 1 0 0\nv 0 1 0 0.5 0.5 0.5\nf 1 2 3\n";
@@ -530,6 +530,14 @@ fn colours_on_some_vertices_are_ignored() {
     let m = read_obj(&obj[..]).unwrap();
     assert_eq!(m.positions, [Vec3::ZERO, Vec3::X, Vec3::Y]);
     assert_eq!(m.indices, [[0, 1, 2]]);
+    let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 2 3\nf 3 2 1\n";
+    assert_eq!(reference(obj).unwrap().0.indices.len(), 2);
+    let m = read_obj(&obj[..]).unwrap();
+    assert_eq!(m.positions, [Vec3::Y, Vec3::X, Vec3::ZERO]);
+    assert_eq!(m.indices, [[0, 1, 2]]);
+    let obj = b"v 0 0 0\nv 1 0 0\nv 0 1 0\nl 1 9 -7\nf 1 2 3\n";
+    assert!(reference(obj).is_err());
+    assert_eq!(read_obj(&obj[..]).unwrap().indices, [[0, 1, 2]]);
 }
 
 /// Lines are found across the blocks the file is read in, a line longer
