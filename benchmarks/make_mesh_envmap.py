@@ -1,7 +1,7 @@
 """Assets of ``scenes/reference/mesh-envmap.xml``, generated instead of committed.
 
     python benchmarks/make_mesh_envmap.py [--out scenes/reference/generated] [--force]
-                                          [--quads N_U N_V]
+                                          [--quads N_U N_V] [--obj]
 
 Writes into ``--out`` (default ``scenes/reference/generated/``, ignored by git):
 
@@ -15,6 +15,10 @@ Writes into ``--out`` (default ``scenes/reference/generated/``, ignored by git):
   analytically), so neither renderer's normal smoothing is involved. The seam
   vertices are duplicated so that ``(u, v)`` runs over ``[0, 1]`` without a
   wrap.
+* ``torus.obj`` (with ``--obj``): the same mesh as an OBJ file, ``v``, ``vt``
+  and ``vn`` lines (nine significant digits, which give the float32 values back) and ``f a/a/a b/b/b c/c/c``
+  faces, for timing the OBJ reader (``docs/benchmarks.md``, "Our own OBJ
+  reader"); the scene reads it with ``type="obj"`` and ``generated/torus.obj``.
 * ``sky.exr``: a 256 × 128 latitude–longitude environment (linear RGB): a
   blue-to-white sky gradient above the horizon, a dim ground below, and a
   small bright sun, so that the luminance-sampled envmap matters.
@@ -89,6 +93,13 @@ def write_ply(path: Path, p: np.ndarray, n: np.ndarray, uv: np.ndarray, tris: np
         f.write(faces.tobytes())
 
 
+def write_obj(path: Path, p: np.ndarray, n: np.ndarray, uv: np.ndarray, tris: np.ndarray) -> None:
+    with open(path, "w") as f:
+        for key, rows in (("v", p), ("vt", uv), ("vn", n)):
+            f.writelines(f"{key} {' '.join(f'{x:.9g}' for x in row)}\n" for row in rows.tolist())
+        f.writelines(f"f {a}/{a}/{a} {b}/{b}/{b} {c}/{c}/{c}\n" for a, b, c in (tris + 1).tolist())
+
+
 SUN_THETA, SUN_PHI = np.radians(50.0), np.radians(120.0)  # from +y; azimuth from +x toward +z
 
 
@@ -114,12 +125,15 @@ def sky() -> np.ndarray:
     return np.asarray(img, dtype=np.float32)
 
 
-def ensure(out: Path = OUT, force: bool = False, quads: tuple[int, int] = (N_U, N_V)) -> Path:
+def ensure(out: Path = OUT, force: bool = False, quads: tuple[int, int] = (N_U, N_V),
+           obj: bool = False) -> Path:
     """Write the assets into `out` if missing (or `force`); returns `out`."""
     out.mkdir(parents=True, exist_ok=True)
     ply, exr = out / "torus.ply", out / "sky.exr"
     if force or not ply.exists():
         write_ply(ply, *torus(*quads))
+    if obj and (force or not (out / "torus.obj").exists()):
+        write_obj(out / "torus.obj", *torus(*quads))
     if force or not exr.exists():
         import fgf
 
@@ -134,10 +148,11 @@ def main() -> int:
     ap.add_argument("--quads", type=int, nargs=2, default=(N_U, N_V), metavar=("N_U", "N_V"),
                     help="quads around the ring and the tube (a smaller mesh for the "
                     "experiment in docs/benchmarks.md; default %(default)s)")
+    ap.add_argument("--obj", action="store_true", help="also write torus.obj")
     args = ap.parse_args()
     if min(args.quads) < 3 or args.quads[0] * args.quads[1] > 10_000_000:
         ap.error("--quads: each at least 3, at most 10,000,000 quads in all")
-    out = ensure(args.out, args.force, tuple(args.quads))
+    out = ensure(args.out, args.force, tuple(args.quads), args.obj)
     n_u, n_v = args.quads
     print(f"wrote {out}/torus.ply ({2 * n_u * n_v} triangles) and {out}/sky.exr ({ENV_W}x{ENV_H})")
     return 0
