@@ -438,7 +438,10 @@ impl Merged {
     /// by its end; `last` if no group follows it.
     /// The group is emptied, but for its slots.
     fn add(&mut self, group: &mut Group, el: &Elements, last: bool) -> Result<(), String> {
-        group.numbers.clear();
+        // A new map rather than `clear`, which takes time in proportion to
+        // the map's capacity: a large group followed by many small ones
+        // would pay for the large one's map again at each.
+        group.numbers = Map::default();
         group.has_faces = false;
         let ahead = std::mem::take(&mut group.ahead);
         let corners = std::mem::take(&mut group.corners);

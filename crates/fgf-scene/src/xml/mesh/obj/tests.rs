@@ -195,8 +195,8 @@ fn bits(m: &ObjMesh) -> Bits<'_> {
     )
 }
 
-/// A reader that gives 1 to 7 bytes at a time (by `k`), and now and then
-/// an interruption.
+/// A reader that gives 1 to 7 bytes at a time, and now and then an
+/// interruption, as a generator seeded with its second field draws them.
 struct Trickle<'a>(&'a [u8], usize);
 
 impl std::io::Read for Trickle<'_> {
