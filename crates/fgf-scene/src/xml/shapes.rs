@@ -10,11 +10,13 @@
 //! | all | `flip_normals` | boolean | – | – | false | turn the normals around |
 //! | `sphere` | `center` | point | length | – | (0, 0, 0) | in local space |
 //! | `sphere` | `radius` | float | length | > 0 | 1 | in local space |
-//! | `obj`, `ply` | `filename` | string | – | a file, relative to the scene file | required | OBJ (any groups, merged) or PLY (ascii or binary; n-gons fan-triangulated) |
+//! | `obj`, `ply` | `filename` | string | – | a file, relative to the scene file | required | OBJ (`v` with an optional `w`, `vt`, `vn`, `f`; any `o`/`g` groups, merged; `l` polylines, materials and vertex colours ignored) or PLY (ascii or binary); n-gons fan-triangulated |
 //! | `obj`, `ply`, `serialized` | `face_normals` | boolean | – | – | false | flat shading: the file's normals are ignored and none are computed (see below); a `serialized` mesh flagged for face normals is flat too |
 //! | `serialized` | `filename` | string | – | a Mitsuba `.serialized` file (format versions 3 and 4), found like every file (see [`super`]) | required | |
 //! | `serialized` | `shape_index` | integer | – | 0 … meshes in the file − 1 | 0 | which mesh of the file |
 //! | all | nested `bsdf` | – | – | one, or a `<ref>` | diffuse 0.5; diffuse 0 on a shape with an area emitter | see below |
+//! | all | nested `emitter` | – | – | one `area` emitter, nested or a `<ref>` to one declared at the top level with an `id` (used by one shape only) | none | see [`super::emitters`] |
+//! | all | nested `medium` | – | – | `name="interior"` and/or `name="exterior"` | none | see [`super::media`] |
 //!
 //! **Texture coordinates** (for [`super::textures`]) are Mitsuba 3's: a
 //! mesh's per-vertex `(u, v)` (an OBJ's `vt` stored as `(u, 1 − v)`; a
@@ -24,8 +26,6 @@
 //! `disk`: `(r, φ/2π)`; `sphere`: `(φ/2π, θ/π)` of the local direction (φ
 //! from +x toward +y in [0, 2π), θ from +z); `cube`: each face mapped
 //! affinely onto the unit square as Mitsuba's cube mesh maps it.
-//! | all | nested `emitter` | – | – | one `area` emitter, nested or a `<ref>` to one declared at the top level with an `id` (used by one shape only) | none | see [`super::emitters`] |
-//! | all | nested `medium` | – | – | `name="interior"` and/or `name="exterior"` | none | see [`super::media`] |
 //!
 //! ```xml
 //! <shape type="sphere">
