@@ -476,7 +476,10 @@ impl Merged {
         let share = !self.earlier.is_empty();
         let mut ids = Vec::with_capacity(if share { corners.len() } else { 0 });
         let mut mine = Vec::with_capacity(if last { 0 } else { corners.len() });
-        let base = self.mesh.positions.len();
+        // Without sharing, no earlier group has a vertex (a group that is
+        // not the last puts all of its new ones in `earlier`), so the
+        // group's own numbers are the mesh's.
+        debug_assert!(share || self.mesh.positions.is_empty());
         for c in &corners {
             let p = el.positions[c[0] as usize];
             let tc = if has_tc {
@@ -522,12 +525,8 @@ impl Merged {
             let id = |i: u32| ids[i as usize];
             let tris = triangles.iter().map(|t| t.map(id));
             self.mesh.indices.extend(tris);
-        } else if self.mesh.indices.is_empty() && base == 0 {
-            self.mesh.indices = triangles;
         } else {
-            let base = base as u32;
-            let tris = triangles.iter().map(|t| t.map(|i| base + i));
-            self.mesh.indices.extend(tris);
+            self.mesh.indices = triangles;
         }
         Ok(())
     }
