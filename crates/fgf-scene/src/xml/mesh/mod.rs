@@ -155,3 +155,48 @@ pub(crate) fn smooth_vertex_normals(
         })
         .collect()
 }
+
+/// A reader for the tests of the mesh readers: it gives at most `step`
+/// bytes a call, as a pipe or a slow disk may, so that values, tokens and
+/// lines straddle every refill; and with [`Trickle::interrupted_every`],
+/// every `k`-th call fails with `Interrupted` (to be retried).
+#[cfg(test)]
+pub(super) struct Trickle<'a> {
+    b: &'a [u8],
+    step: usize,
+    interrupt: usize,
+    calls: usize,
+}
+
+#[cfg(test)]
+impl<'a> Trickle<'a> {
+    pub(super) fn new(b: &'a [u8], step: usize) -> Self {
+        Trickle {
+            b,
+            step,
+            interrupt: 0,
+            calls: 0,
+        }
+    }
+
+    pub(super) fn interrupted_every(self, k: usize) -> Self {
+        Trickle {
+            interrupt: k,
+            ..self
+        }
+    }
+}
+
+#[cfg(test)]
+impl std::io::Read for Trickle<'_> {
+    fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
+        self.calls += 1;
+        if self.interrupt > 0 && self.calls % self.interrupt == 0 {
+            return Err(std::io::ErrorKind::Interrupted.into());
+        }
+        let n = self.step.min(out.len()).min(self.b.len());
+        out[..n].copy_from_slice(&self.b[..n]);
+        self.b = &self.b[n..];
+        Ok(n)
+    }
+}

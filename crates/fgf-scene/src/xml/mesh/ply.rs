@@ -535,27 +535,12 @@ fn parse_ply(src: impl Read, len: u64) -> Result<TriangleMesh, String> {
 
 #[cfg(test)]
 mod tests {
+    use super::super::Trickle;
     use super::*;
 
     /// The mesh of the PLY file `b`.
     fn parse(b: &[u8]) -> Result<TriangleMesh, String> {
         parse_ply(b, b.len() as u64)
-    }
-
-    /// A reader that gives at most `step` bytes a call (as a pipe or a
-    /// slow disk may): values and tokens straddle every refill.
-    struct Trickle<'a> {
-        b: &'a [u8],
-        step: usize,
-    }
-
-    impl Read for Trickle<'_> {
-        fn read(&mut self, out: &mut [u8]) -> std::io::Result<usize> {
-            let n = self.step.min(out.len()).min(self.b.len());
-            out[..n].copy_from_slice(&self.b[..n]);
-            self.b = &self.b[n..];
-            Ok(n)
-        }
     }
 
     /// A binary grid of `k` × `k` vertices (`z` the vertex's number, `u`
@@ -592,7 +577,7 @@ mod tests {
         assert!(b.len() > 3 * CHUNK);
         let len = b.len() as u64;
         for step in [usize::MAX, 5] {
-            let m = parse_ply(Trickle { b: &b, step }, len).unwrap();
+            let m = parse_ply(Trickle::new(&b, step), len).unwrap();
             assert_eq!(m.positions.len(), (k * k) as usize);
             for (i, p) in m.positions.iter().enumerate() {
                 let i = i as u32;
@@ -614,7 +599,7 @@ mod tests {
         // The same file cut short, read either way.
         let cut = &b[..b.len() - 3];
         for step in [usize::MAX, 5] {
-            let e = parse_ply(Trickle { b: cut, step }, len).unwrap_err();
+            let e = parse_ply(Trickle::new(cut, step), len).unwrap_err();
             assert!(e.contains("end of file"), "{e}");
         }
     }
@@ -624,14 +609,7 @@ mod tests {
     fn ascii_tokens_across_refills() {
         let b = SQUARE_ASCII.replace("1 1 0", "1.000 1e0   0.0");
         for step in 1..8 {
-            let m = parse_ply(
-                Trickle {
-                    b: b.as_bytes(),
-                    step,
-                },
-                b.len() as u64,
-            )
-            .unwrap();
+            let m = parse_ply(Trickle::new(b.as_bytes(), step), b.len() as u64).unwrap();
             assert_eq!(m.positions[2], Vec3::new(1.0, 1.0, 0.0), "step {step}");
             assert_eq!(m.indices, vec![[0, 1, 2], [0, 2, 3]]);
         }

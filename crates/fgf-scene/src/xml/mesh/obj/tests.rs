@@ -2,6 +2,7 @@
 //! check of the face indices and our sharing of vertices across groups)
 //! on generated files, and on cases of its own.
 
+use super::super::Trickle;
 use super::{lines, parse_i64, read_obj, words, ObjMesh};
 use glam::{Vec2, Vec3};
 use rand::{Rng, SeedableRng};
@@ -195,27 +196,6 @@ fn bits(m: &ObjMesh) -> Bits<'_> {
     )
 }
 
-/// A reader that gives 1 to 7 bytes at a time, and now and then an
-/// interruption, as a generator seeded with its second field draws them.
-struct Trickle<'a>(&'a [u8], usize);
-
-impl std::io::Read for Trickle<'_> {
-    fn read(&mut self, buf: &mut [u8]) -> std::io::Result<usize> {
-        self.1 = self
-            .1
-            .wrapping_mul(6364136223846793005)
-            .wrapping_add(1442695040888963407);
-        let r = self.1 >> 40;
-        if r % 11 == 0 {
-            return Err(std::io::ErrorKind::Interrupted.into());
-        }
-        let n = (1 + r % 7).min(self.0.len()).min(buf.len());
-        buf[..n].copy_from_slice(&self.0[..n]);
-        self.0 = &self.0[n..];
-        Ok(n)
-    }
-}
-
 /// A random OBJ file, small, of the statements that matter and their edge
 /// cases: few distinct numbers (so that vertices of different groups
 /// coincide), indices in range, just out of it, negative, zero, ahead of
@@ -348,8 +328,9 @@ fn reads_as_tobj_did() {
     for case in 0..30_000 {
         let obj = random_obj(&mut rng);
         let ours = read_obj(obj.as_bytes());
-        // The same, the file read a few bytes at a time.
-        let trickled = read_obj(Trickle(obj.as_bytes(), case));
+        // The same, the file read a few bytes at a time, with interruptions.
+        let trickle = Trickle::new(obj.as_bytes(), 1 + case % 7).interrupted_every(2 + case % 9);
+        let trickled = read_obj(trickle);
         assert_eq!(
             ours.as_ref().map(bits),
             trickled.as_ref().map(bits),
