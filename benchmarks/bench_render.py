@@ -2,7 +2,7 @@
 
     python benchmarks/bench_render.py [--spp 1024] [--repeats 3] [--res 256] [--max-depth 64]
                                       [--threads N] [--scene NAME]... [--no-warmup] [--no-inprocess]
-                                      [--variant scalar_rgb] [--also LABEL=COMMAND]...
+                                      [--variant scalar_rgb] [--also LABEL=COMMAND]... [--narrow-mitsuba]
     python benchmarks/bench_render.py --scaling [--res 128] [--spp 64] [--repeats 3]
 
 Default mode: whole processes, the way a user renders a scene file:
@@ -31,6 +31,14 @@ wheel's two builds (docs/benchmarks.md, "One wheel, two builds"):
 ``--also "wheel=/tmp/wv/bin/fgf" --also "portable=env FGF_PORTABLE=1
 /tmp/wv/bin/fgf"``. Each is reported with its speed-up, and whether its EXR
 is identical to the first fgf's byte for byte.
+
+``--narrow-mitsuba``: three more Mitsuba runs in the same rounds, each rendering the
+scene in one Python process with ``benchmarks/mitsuba_narrow.py``: ``mitsuba script``
+(Mitsuba's own vector width: a control for the script against the CLI), ``mitsuba
+8-wide`` (Dr.Jit's kernels at eight lanes without AVX-512) and ``mitsuba 8-wide avx2``
+(Embree's AVX2 kernels as well). On a CPU with AVX-512 they tell what its wide vectors
+give Mitsuba; each row's speed-up is that run's time over fgf's, and its image mean is
+compared with Mitsuba's own.
 
 ``--variant``: the Mitsuba variant of the whole-process runs (default
 ``llvm_ad_rgb``, the one the goals are stated against). ``scalar_rgb`` traces
@@ -81,6 +89,12 @@ REFERENCE = ROOT / "scenes" / "reference"
 SCENES = ["cube-homogeneous.xml", "cube-heterogeneous.xml", "mesh-envmap.xml"]
 LLVM19 = "/usr/lib/x86_64-linux-gnu/libLLVM.so.19.1"
 INPROCESS_SPP = 64
+# --narrow-mitsuba: labels and arguments of benchmarks/mitsuba_narrow.py.
+NARROW = {
+    "mitsuba script": ["--width", "0"],
+    "mitsuba 8-wide": ["--width", "8"],
+    "mitsuba 8-wide avx2": ["--width", "8", "--embree-isa", "avx2"],
+}
 
 
 def scene_path(name: str) -> Path:
@@ -161,6 +175,16 @@ def commands(scene: Path, out: Path, args: argparse.Namespace) -> dict[str, list
         fgf += ["--threads", str(args.threads)]
         mts += ["-t", str(args.threads)]
     cmds = {"fgf": fgf}
+    if args.narrow_mitsuba:
+        # Mitsuba with narrower vectors (benchmarks/mitsuba_narrow.py), and that script at
+        # Mitsuba's own width, a control for rendering in a Python process instead of the CLI.
+        narrow = [sys.executable, str(ROOT / "benchmarks" / "mitsuba_narrow.py")]
+        for d in defines:
+            narrow += ["-D", d]
+        if args.threads is not None:
+            narrow += ["--threads", str(args.threads)]
+        for label, extra in NARROW.items():
+            cmds[label] = narrow + [*extra, str(scene), str(out / f"{label}.exr")]
     # Other builds of fgf (--also LABEL=COMMAND): the same arguments, their own output.
     for label, command in also(args):
         cmds[label] = shlex.split(command) + fgf[1:4] + [str(out / f"{label}.exr")] + fgf[5:]
@@ -172,8 +196,9 @@ def also(args: argparse.Namespace) -> list[tuple[str, str]]:
     pairs = []
     for item in args.also:
         label, sep, command = item.partition("=")
-        if not sep or not label or not command or label in ("fgf", "mitsuba"):
-            sys.exit(f"bench_render: error: --also {item!r}: expected LABEL=COMMAND, LABEL not fgf or mitsuba")
+        if not sep or not label or not command or label in ("fgf", "mitsuba", *NARROW):
+            sys.exit(f"bench_render: error: --also {item!r}: expected LABEL=COMMAND, LABEL not fgf, "
+                     "mitsuba or a --narrow-mitsuba label")
         pairs.append((label, command))
     return pairs
 
@@ -198,8 +223,11 @@ def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, Any]
         same = {
             label: (Path(tmp) / f"{label}.exr").read_bytes() == reference
             for label in names
-            if label not in ("fgf", "mitsuba")
+            if label not in ("fgf", "mitsuba", *NARROW)
         }
+        # Mitsuba's narrower renders against its own (the same image, other vectors).
+        narrow = {label: mean_difference(Path(tmp) / f"{label}.exr", Path(tmp) / "mitsuba.exr")
+                  for label in names if label in NARROW}
     out: dict[str, dict[str, Any]] = {
         name: {"wall": statistics.median(r[0] for r in rs), "cpu": statistics.median(r[1] for r in rs)}
         for name, rs in runs.items()
@@ -207,6 +235,8 @@ def processes(scene: Path, args: argparse.Namespace) -> dict[str, dict[str, Any]
     out["fgf"]["mean_diff"] = diff
     for label, identical in same.items():
         out[label]["same_exr"] = identical
+    for label, d in narrow.items():
+        out[label]["mean_diff"] = d
     # Every round's wall time, for the spread behind the medians.
     for name, rs in runs.items():
         out[name]["rounds"] = [r[0] for r in rs]
@@ -292,6 +322,8 @@ def compare(args: argparse.Namespace) -> None:
           f"load average {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
     print(f"# cpu: {cpu_description()}")
     print(f"# speed-up = Mitsuba {args.variant} time / fgf time (> 1: fgf is faster)")
+    if args.narrow_mitsuba:
+        print("# rows 'mitsuba …' (benchmarks/mitsuba_narrow.py): speed-up = that Mitsuba's time / fgf time")
     cols = f"{'wall s':>8} {'CPU s':>8} {'speed-up wall':>13} {'speed-up CPU':>12}"
     side = f" | in-process {INPROCESS_SPP} spp, M samples/s" if args.inprocess else ""
     print(f"{'scene':<24} {'renderer':<20} {cols}{side}")
@@ -303,13 +335,22 @@ def compare(args: argparse.Namespace) -> None:
         for who in r:
             label = f"mitsuba {args.variant}" if who == "mitsuba" else who
             x = r[who]
-            su = f"{m['wall'] / x['wall']:12.2f}x {m['cpu'] / x['cpu']:11.2f}x" if who != "mitsuba" else f"{'':>13} {'':>12}"
+            if who == "mitsuba":
+                su = f"{'':>13} {'':>12}"
+            elif who in NARROW:  # fgf's speed-up against this Mitsuba
+                su = f"{x['wall'] / f['wall']:12.2f}x {x['cpu'] / f['cpu']:11.2f}x"
+            else:
+                su = f"{m['wall'] / x['wall']:12.2f}x {m['cpu'] / x['cpu']:11.2f}x"
             extra = f" | {ip[who]:8.3f}" if ip and who in ip else ""
             if ip and who == "fgf":
                 extra += f" ({ip['fgf'] / ip['mitsuba']:.2f}x)"
             print(f"{scene.stem:<24} {label:<20} {x['wall']:8.2f} {x['cpu']:8.2f} {su}{extra}")
         d = " ".join(f"{100 * v:+.3f}%" for v in f["mean_diff"])
         print(f"{scene.stem:<24} {'image mean fgf/mitsuba - 1 (r g b)':<45} {d}")
+        for who in r:
+            if who in NARROW:
+                d = " ".join(f"{100 * v:+.3f}%" for v in r[who]["mean_diff"])
+                print(f"{scene.stem:<24} {'image mean ' + who + '/mitsuba - 1':<45} {d}")
         for who in r:
             if "same_exr" in r[who]:
                 same = "identical" if r[who]["same_exr"] else "DIFFERENT"
@@ -379,6 +420,9 @@ def main() -> int:
     ap.add_argument("--also", action="append", default=[], metavar="LABEL=COMMAND",
                     help="another fgf build to time in the same rounds, e.g. "
                     "'portable=env FGF_PORTABLE=1 /tmp/venv/bin/fgf' (repeatable)")
+    ap.add_argument("--narrow-mitsuba", action="store_true",
+                    help="also time Mitsuba at 8 lanes without AVX-512, and with Embree's AVX2 kernels "
+                         "(benchmarks/mitsuba_narrow.py)")
     ap.add_argument("--scaling", action="store_true", help="thread scaling and cost linearity instead")
     ap.add_argument("--variant", default="llvm_ad_rgb", choices=["llvm_ad_rgb", "scalar_rgb"],
                     help="Mitsuba variant of the whole-process runs (default llvm_ad_rgb)")
@@ -391,6 +435,8 @@ def main() -> int:
     if args.variant != "llvm_ad_rgb" and (args.scaling or args.inprocess):
         ap.error("--variant other than llvm_ad_rgb needs --no-inprocess and no --scaling "
                  "(the in-process column is llvm only; --scaling runs no Mitsuba)")
+    if args.narrow_mitsuba and (args.scaling or args.variant != "llvm_ad_rgb"):
+        ap.error("--narrow-mitsuba is for the whole-process runs against llvm_ad_rgb")
     if not args.scaling and args.variant == "llvm_ad_rgb" and not Path(LLVM19).exists() and "DRJIT_LIBLLVM_PATH" not in os.environ:
         ap.error(f"{LLVM19} is missing: Mitsuba's llvm_ad_rgb needs it (apt-get install -y libllvm19)")
     if args.scaling:
