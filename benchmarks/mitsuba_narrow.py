@@ -62,6 +62,7 @@ void *narrow_new_device(const char *cfg) {
     }
     snprintf(buf, sizeof buf, "%s%sisa=%s%s", cfg ? cfg : "", cfg && *cfg ? "," : "",
              getenv("MITSUBA_NARROW_EMBREE"), getenv("MITSUBA_NARROW_VERBOSE") ? ",verbose=1" : "");
+    setenv("MITSUBA_NARROW_APPLIED", buf, 1); /* for the script's check that this ran */
     return real(buf);
 }
 """
@@ -98,14 +99,18 @@ def set_llvm_width(width: int) -> None:
 
     dr.eval(dr.llvm.Float([1.0, 2.0]) + 1.0)  # the backend starts on first use
     lib = ctypes.CDLL(str(Path(dr.__file__).parent / "libdrjit-core.so"))
-    cpu, features, get_width = (lib._Z19jit_llvm_target_cpuv, lib._Z24jit_llvm_target_featuresv,
-                                lib._Z21jit_llvm_vector_widthv)
+    try:
+        cpu, features, get_width, set_target = (
+            lib._Z19jit_llvm_target_cpuv, lib._Z24jit_llvm_target_featuresv,
+            lib._Z21jit_llvm_vector_widthv, lib._Z19jit_llvm_set_targetPKcS0_j)
+    except AttributeError as e:
+        fail(f"this Dr.Jit does not export the function the script calls ({e}); written for Mitsuba 3.9.1")
     cpu.restype = features.restype = ctypes.c_char_p
     get_width.restype = ctypes.c_uint32
     feats = features().decode()
     if width < 16:
         feats = ",".join("-" + f[1:] if f.startswith(("+avx512", "+evex512")) else f for f in feats.split(","))
-    lib._Z19jit_llvm_set_targetPKcS0_j(cpu(), feats.encode(), ctypes.c_uint32(width))
+    set_target(cpu(), feats.encode(), ctypes.c_uint32(width))
     if get_width() != width:
         fail(f"Dr.Jit's LLVM backend did not take width {width} (it has {get_width()})")
 
@@ -141,6 +146,7 @@ def main() -> int:
         lib = shim()
         env = dict(os.environ, LD_PRELOAD=f"{lib}:{os.environ.get('LD_PRELOAD', '')}".rstrip(":"))
         env[SHIM_ENV] = args.embree_isa
+        env.pop("MITSUBA_NARROW_APPLIED", None)
         env["MITSUBA_NARROW_EMBREE_LIB"] = str(Path(mitsuba.__file__).parent / "libembree3.so")
         if args.verbose:
             env["MITSUBA_NARROW_VERBOSE"] = "1"
@@ -157,6 +163,15 @@ def main() -> int:
         scene = mi.load_file(str(args.scene), **params)
     except Exception as e:  # Mitsuba reports bad scenes and parameters as exceptions
         fail(f"{args.scene}: {str(e).strip().splitlines()[-1] if str(e).strip() else type(e).__name__}")
+    if args.embree_isa:
+        # The preloaded library marks the process when Mitsuba creates Embree's device
+        # through it (at the first scene); if Mitsuba's symbol were another, Embree
+        # would run at its own ISA without a word.
+        libc = ctypes.CDLL(None)
+        libc.getenv.restype = ctypes.c_char_p
+        applied = libc.getenv(b"MITSUBA_NARROW_APPLIED")
+        if not applied or f"isa={args.embree_isa}".encode() not in applied:
+            fail("Embree's device was not made through the preloaded library; written for Mitsuba 3.9.1")
     image = mi.render(scene)
     mi.Bitmap(image).write(str(args.out))
     return 0
