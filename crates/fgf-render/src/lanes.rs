@@ -6,7 +6,8 @@
 //! [`crate::emitter::envmap`]) use all four.
 //!
 //! Where the build enables AVX2 (the default native build) each operation
-//! is one AVX2 instruction (two for `D8`); elsewhere (the portable wheel,
+//! is one AVX2 instruction (two for `D8`, kept apart where the build also
+//! has AVX-512, see `apart_pd`); elsewhere (the portable wheel,
 //! other architectures) the same operations are written out lane by lane.
 //! Both give the same bits in every lane, including the rules of x86 that
 //! the callers rely on, which the portable code follows:
@@ -211,8 +212,8 @@ mod avx {
         pub fn to_f64(self) -> D8 {
             unsafe {
                 D8([
-                    _mm256_cvtps_pd(_mm256_castps256_ps128(self.0)),
-                    _mm256_cvtps_pd(_mm256_extractf128_ps::<1>(self.0)),
+                    apart_pd(_mm256_cvtps_pd(_mm256_castps256_ps128(self.0))),
+                    apart_pd(_mm256_cvtps_pd(_mm256_extractf128_ps::<1>(self.0))),
                 ])
             }
         }
@@ -301,6 +302,47 @@ mod avx {
         pub fn to_bits_f32(self) -> F8 {
             F8(unsafe { _mm256_castsi256_ps(self.0) })
         }
+    }
+
+    /// `x`, which the compiler may not join with the other half of a
+    /// [`D8`] into one 512-bit operation. Where the build has AVX-512, LLVM
+    /// would otherwise fuse a `D8`'s two halves, and the whole chain of
+    /// `f64` arithmetic before or after them, into 512-bit instructions
+    /// (the environment map's `atan2`, `acos` and the conductors' Fresnel
+    /// terms). On an Intel Xeon the mesh render then took 8 % longer, spread
+    /// over every part of it, the tree walks included: most likely the core's
+    /// clock lowered for 512-bit floating-point work (docs/benchmarks.md,
+    /// "What AVX-512 gives Mitsuba on an Intel Xeon"). An empty `asm!` block
+    /// is the barrier: it emits no instruction and changes no bit.
+    #[inline(always)]
+    fn apart_pd(x: __m256d) -> __m256d {
+        #[cfg(target_feature = "avx512f")]
+        {
+            let mut x = x;
+            // SAFETY: the block is empty; it only keeps `x` in a 256-bit register.
+            unsafe {
+                std::arch::asm!("/* {0} */", inout(ymm_reg) x, options(pure, nomem, nostack))
+            };
+            x
+        }
+        #[cfg(not(target_feature = "avx512f"))]
+        x
+    }
+
+    /// [`apart_pd`] for the `f32` half of a [`D8`] narrowed to `f32`.
+    #[inline(always)]
+    fn apart_ps(x: __m128) -> __m128 {
+        #[cfg(target_feature = "avx512f")]
+        {
+            let mut x = x;
+            // SAFETY: the block is empty; it only keeps `x` in a 128-bit register.
+            unsafe {
+                std::arch::asm!("/* {0} */", inout(xmm_reg) x, options(pure, nomem, nostack))
+            };
+            x
+        }
+        #[cfg(not(target_feature = "avx512f"))]
+        x
     }
 
     /// A mask of `D8` lanes (all bits set or clear per 64-bit lane).
@@ -410,7 +452,10 @@ mod avx {
         #[inline(always)]
         pub fn to_f32(self) -> F8 {
             unsafe {
-                let (lo, hi) = (_mm256_cvtpd_ps(self.0[0]), _mm256_cvtpd_ps(self.0[1]));
+                let (lo, hi) = (
+                    apart_ps(_mm256_cvtpd_ps(self.0[0])),
+                    apart_ps(_mm256_cvtpd_ps(self.0[1])),
+                );
                 F8(_mm256_insertf128_ps::<1>(_mm256_castps128_ps256(lo), hi))
             }
         }
