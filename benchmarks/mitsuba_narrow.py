@@ -24,6 +24,10 @@ on one machine, how much of Mitsuba's speed the wide vectors give (docs/benchmar
   builds Embree in the C++ namespace ``mitsuba``, hence the symbol's mangled name.)
   ``--verbose`` asks Embree to print the ISA it uses.
 
+``--threads 1`` hangs, as ``mitsuba -t 1`` of the same wheel does on our machines (Mitsuba's
+CLI, asked for a 16² render with `-t 1`, was still running after 30 s); two threads and
+more work.
+
 The image is the one Mitsuba's CLI renders (the same scene, parameters and seed); only
 the vectors differ. Bad arguments exit with status 2 and one line.
 """
