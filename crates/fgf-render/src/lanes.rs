@@ -312,8 +312,10 @@ mod avx {
     /// terms). On an Intel Xeon the mesh render then took 8 % longer, spread
     /// over every part of it, the tree walks included: most likely the core's
     /// clock lowered for 512-bit floating-point work (docs/benchmarks.md,
-    /// "What AVX-512 gives Mitsuba on an Intel Xeon"). An empty `asm!` block
-    /// is the barrier: it emits no instruction and changes no bit.
+    /// "What AVX-512 gives Mitsuba on an Intel Xeon"). On a Zen 5 the fused
+    /// kernels were no faster (docs/benchmarks.md, "A Zen 5 EPYC"), so the
+    /// barrier holds on every CPU. An empty `asm!` block is the barrier: it
+    /// emits no instruction and changes no bit.
     #[inline(always)]
     fn apart_pd(x: __m256d) -> __m256d {
         #[cfg(target_feature = "avx512f")]
